@@ -1,0 +1,47 @@
+# The front door: a thin layer over CMake. Every target installs what is missing first.
+BUILD      ?= build
+FUZZ_BUILD ?= build-fuzz
+JOBS       ?= $(shell nproc)
+FUZZ_SECONDS ?= 20
+CMAKE_ARGS ?=
+LAUNCHER   := $(if $(shell command -v ccache 2>/dev/null),-DCMAKE_CXX_COMPILER_LAUNCHER=ccache,)
+
+.PHONY: deps deps-bench build test unit fuzz up bench clean format
+
+deps:
+	@scripts/install-deps.sh test
+
+deps-bench:
+	@scripts/install-deps.sh bench
+
+$(BUILD)/build.ninja:
+	cmake -S . -B $(BUILD) -G Ninja -DCMAKE_BUILD_TYPE=Release $(LAUNCHER) $(CMAKE_ARGS)
+
+build: deps $(BUILD)/build.ninja
+	cmake --build $(BUILD) -j $(JOBS)
+
+# Every test: the GoogleTest suites through ctest, then each fuzz target briefly.
+test: build
+	cd $(BUILD) && ctest -j $(JOBS) --output-on-failure --timeout 900
+	$(MAKE) fuzz
+
+unit: build
+	cd $(BUILD) && ctest -j $(JOBS) --output-on-failure -LE slow
+
+fuzz: deps
+	CC=clang CXX=clang++ cmake -S . -B $(FUZZ_BUILD) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+	  -DMESHFLOW_BUILD_TESTS=OFF -DMESHFLOW_BUILD_FUZZERS=ON $(LAUNCHER)
+	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target meshflow_fuzzers
+	tests/fuzz/run.sh $(FUZZ_BUILD)/tests/fuzz $(FUZZ_SECONDS)
+
+up: build
+	scripts/up.sh $(BUILD)/meshflow
+
+bench: deps-bench build
+	bench/run.sh $(BUILD)/meshflow
+
+format:
+	git ls-files '*.h' '*.cpp' | xargs clang-format -i
+
+clean:
+	rm -rf $(BUILD) $(FUZZ_BUILD)
