@@ -30,6 +30,7 @@ unit: build
 
 fuzz: deps
 	CC=clang CXX=clang++ cmake -S . -B $(FUZZ_BUILD) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+	  -DCMAKE_CXX_FLAGS="-fsanitize=fuzzer-no-link,address,undefined" \
 	  -DMESHFLOW_BUILD_TESTS=OFF -DMESHFLOW_BUILD_FUZZERS=ON $(LAUNCHER)
 	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target meshflow_fuzzers
 	tests/fuzz/run.sh $(FUZZ_BUILD)/tests/fuzz $(FUZZ_SECONDS)

@@ -180,8 +180,10 @@ InputStream InputStream::from_memory(std::span<const std::uint8_t> bytes, const 
 }
 
 void InputStream::detect_compression() {
-  // Peek at the raw bytes: the magic decides, whatever the extension says.
-  buffer_.resize(kChunk);
+  // Peek at the raw bytes: the magic decides, whatever the extension says. Small inputs get
+  // a small buffer (fill() grows it when decompressed content needs more).
+  std::size_t initial = known_size_ >= 0 ? static_cast<std::size_t>(known_size_) + 64 : kChunk;
+  buffer_.resize(std::clamp<std::size_t>(initial, 64, kChunk));
   std::size_t n = 0;
   while (n < 4) {
     std::size_t got = source_->read(buffer_.data() + n, 4 - n);
@@ -248,7 +250,7 @@ bool InputStream::next_line(std::string_view& line) {
       return true;
     }
     search_from = avail;
-    fill(std::max<std::size_t>(avail * 2, kChunk));
+    fill(std::max<std::size_t>(avail * 2, std::min(kChunk, buffer_.size() * 2)));
   }
 }
 

@@ -14,6 +14,14 @@ for fuzzer in "$dir"/fuzz_*; do
   work=$dir/corpus-work/$name; mkdir -p "$work" "$dir/crashes"
   seeds=("$work")
   [ -d "$here/corpus/$name" ] && seeds+=("$here/corpus/$name")
+  # Small shared meshes of the reader's format seed it too (binary layouts included).
+  shared="$here/../../../shared/data/meshes"
+  if [ -d "$shared" ]; then
+    mkdir -p "$work/shared"
+    find "$shared" -type f -size -64k \( -iname "*.$name" -o -name "*" -a -path "*$name*" \) \
+      -exec cp -f {} "$work/shared/" \; 2>/dev/null || true
+    [ "$name" = mesh ] && find "$shared" -type f -size -64k -exec cp -f {} "$work/shared/" \; 2>/dev/null
+  fi
   echo "fuzz: $name for ${seconds}s"
   if ! timeout $((seconds + 120)) "$fuzzer" -max_total_time="$seconds" -max_len=65536 -rss_limit_mb=2048 \
        -artifact_prefix="$dir/crashes/$name-" -print_final_stats=0 "${seeds[@]}" >"$dir/$name.log" 2>&1; then
