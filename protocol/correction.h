@@ -1,0 +1,48 @@
+#pragma once
+// Correction files (.mfc, DESIGN §6, thesis §4.3.2): the edits that turn a base mesh into a
+// result, named by the SHA-256 of both (over their canonical PLY bytes), compressed.
+//
+// Layout: "MFC1" magic, version byte (1), 32-byte SHA-256 of the base, 32-byte SHA-256 of the
+// result, u64 payload size, u32 edit count, then one zstd frame holding five streams (opcodes;
+// varint ids, delta-coded; raw float32 positions; zigzag float32 bit deltas for moves, relative
+// to the vertex's current position; flags), positions and deltas split into byte planes so that
+// small moves compress to little. The encoder is deterministic. Decoding is safe for untrusted
+// input: bad magic, unknown version, truncation, trailing bytes and absurd counts are refused
+// with InvalidInput, never a crash.
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "mesh/mesh.h"
+#include "protocol/edits.h"
+
+namespace meshflow::protocol {
+
+struct CorrectionHeader {
+  std::string base_sha256;    // lowercase hex
+  std::string result_sha256;  // lowercase hex
+  std::uint32_t edit_count = 0;
+};
+
+// Encodes `edits`, which must apply to `base` (moves are coded against the positions they
+// replace). \throws InvalidInput when an edit does not apply.
+std::vector<std::uint8_t> encode_correction(const mesh::Mesh& base, const std::string& base_sha256,
+                                            const std::string& result_sha256, const EditList& edits);
+
+// The header alone (what a correction applies to and yields). \throws InvalidInput.
+CorrectionHeader read_correction_header(std::span<const std::uint8_t> bytes);
+
+// Decodes the edits against `base` (the mesh they apply to). \throws InvalidInput.
+EditList decode_correction(const mesh::Mesh& base, std::span<const std::uint8_t> bytes);
+
+// Applies a correction: checks the base's hash first and the result's after; on any mismatch
+// throws InvalidInput saying which hash differs, and returns nothing half-patched.
+mesh::Mesh apply_correction(const mesh::Mesh& base, std::span<const std::uint8_t> bytes);
+
+// File helpers. \throws IoError.
+std::vector<std::uint8_t> read_file_bytes(const std::string& path);
+void write_file_bytes(const std::string& path, std::span<const std::uint8_t> bytes);
+
+}  // namespace meshflow::protocol
