@@ -171,7 +171,7 @@ void EditMesh::apply_unrecorded(const Edit& edit) {
                 for (Index s : shared) {
                   const auto& o = triangles_[s];
                   if (s != t && (o[0] == e.b || o[1] == e.b || o[2] == e.b)) {
-                    x = p, y = q, found = true;
+                    x = std::min(p, q), y = std::max(p, q), found = true;
                     break;
                   }
                 }

@@ -195,11 +195,24 @@ void remove_degenerate_triangles(EditMesh& m) {
         if (l > best) best = l, longest = k;
       }
       Index x = t[longest], y = t[(longest + 1) % 3];
+      Index corner = t[(longest + 2) % 3];
       auto across = m.triangles_of_edge(x, y);
-      if (across.size() == 1) {
+      auto collapse_corner = [&] {
+        // The corner lying on the long edge goes to the nearer end of it.
+        Index near = length2(m.position(corner), m.position(x)) <= length2(m.position(corner), m.position(y)) ? x : y;
+        m.collapse_edge(std::min(near, corner), std::max(near, corner),
+                        near < corner ? std::nullopt : std::optional<Point>(m.position(near)));
+      };
+      bool fin = m.triangles_of_edge(x, corner).size() == 1 && m.triangles_of_edge(y, corner).size() == 1;
+      if (across.size() == 1 || fin) {
+        // On the boundary, or a fin whose short edges nothing else uses: its two short edges
+        // span the same segment as its long one, so removing it opens no hole.
         m.remove_triangle(id);
         changed = true;
-      } else if (across.size() == 2) {
+      } else if (across.size() > 2) {
+        collapse_corner();
+        changed = true;
+      } else {
         Index other = across[0] == id ? across[1] : across[0];
         const auto& o = m.triangle(other);
         Index d = o[0] + o[1] + o[2] - x - y;
@@ -216,15 +229,11 @@ void remove_degenerate_triangles(EditMesh& m) {
             // Inconsistently oriented neighbours: leave it for the next rule.
           }
         } else {
-          // Collapse the corner on the long edge onto the nearer end.
-          Index near = length2(m.position(opposite), m.position(x)) <= length2(m.position(opposite), m.position(y)) ? x : y;
-          m.collapse_edge(std::min(near, opposite), std::max(near, opposite),
-                          near < opposite ? std::nullopt : std::optional<Point>(m.position(near)));
+          collapse_corner();
           changed = true;
         }
       }
     }
-    // Vertices left without triangles by collapses are dropped.
     if (!changed) break;
   }
 }
