@@ -33,6 +33,12 @@ fuzz: deps
 	  -DCMAKE_CXX_FLAGS="-fsanitize=fuzzer-no-link,address,undefined" \
 	  -DMESHFLOW_BUILD_TESTS=OFF -DMESHFLOW_BUILD_FUZZERS=ON $(LAUNCHER)
 	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target meshflow_fuzzers
+	@# Seed the correction fuzzer with real corrections made by the tool itself.
+	@mkdir -p $(FUZZ_BUILD)/tests/fuzz/corpus-work/correction
+	@if [ -x $(BUILD)/meshflow ]; then \
+	  $(BUILD)/meshflow op LaplacianSmoothing tests/fuzz/corpus/off/coff.off -o $(FUZZ_BUILD)/seed.ply \
+	    --correction $(FUZZ_BUILD)/tests/fuzz/corpus-work/correction/seed-ls.mfc >/dev/null 2>&1 || true; \
+	fi
 	tests/fuzz/run.sh $(FUZZ_BUILD)/tests/fuzz $(FUZZ_SECONDS)
 
 up: build
