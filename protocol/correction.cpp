@@ -2,6 +2,7 @@
 
 #include <zstd.h>
 
+#include <algorithm>
 #include <bit>
 #include <cstring>
 #include <fstream>
@@ -18,10 +19,57 @@ constexpr std::uint8_t kVersion = 1;
 constexpr std::size_t kHeaderSize = 4 + 1 + 32 + 32 + 8 + 4;
 constexpr std::uint64_t kMaxPayload = 1ull << 34;  // 16 GiB: anything bigger is not ours
 constexpr std::uint8_t kHasPoint = 0x80;
-enum Stream { kOps, kIds, kPositions, kDeltas, kStreams };
+enum Stream { kOps, kIds, kPositions, kDeltas, kFlags, kStreams };
 
 // ---- encoding helpers ----
+// The umbrella prediction of every live vertex: the average of its edge neighbours (ascending
+// ids, summed in double, rounded once), or its own position when it has none. Encoder and
+// decoder compute it on the same mesh state, so it is identical on both sides.
+std::vector<Point> umbrella_predictions(const EditMesh& mesh) {
+  std::size_t V = mesh.vertex_slots();
+  std::vector<std::uint64_t> keys;
+  for (std::size_t t = 0; t < mesh.triangle_slots(); ++t) {
+    if (!mesh.triangle_alive(static_cast<Index>(t))) continue;
+    const auto& tri = mesh.triangle(static_cast<Index>(t));
+    for (int k = 0; k < 3; ++k) {
+      Index a = tri[k], b = tri[(k + 1) % 3];
+      if (a == b) continue;
+      keys.push_back(static_cast<std::uint64_t>(std::min(a, b)) << 32 | std::max(a, b));
+      keys.push_back(static_cast<std::uint64_t>(std::max(a, b)) << 32 | std::min(a, b));
+    }
+  }
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  std::vector<Point> out;
+  std::size_t at = 0;
+  for (std::size_t v = 0; v < V; ++v) {
+    double sum[3] = {0, 0, 0};
+    std::size_t n = 0;
+    for (; at < keys.size() && (keys[at] >> 32) == v; ++at, ++n) {
+      const Point& p = mesh.position(static_cast<Index>(keys[at] & 0xffffffff));
+      for (int k = 0; k < 3; ++k) sum[k] += p[k];
+    }
+    if (!mesh.vertex_alive(static_cast<Index>(v))) continue;
+    if (n == 0) out.push_back(mesh.position(static_cast<Index>(v)));
+    else out.push_back({static_cast<float>(sum[0] / double(n)), static_cast<float>(sum[1] / double(n)),
+                        static_cast<float>(sum[2] / double(n))});
+  }
+  return out;
+}
+
+std::uint32_t zigzag_delta(float from, float to) {
+  auto d = static_cast<std::int32_t>(std::bit_cast<std::uint32_t>(to) - std::bit_cast<std::uint32_t>(from));
+  return (static_cast<std::uint32_t>(d) << 1) ^ static_cast<std::uint32_t>(d >> 31);
+}
+
 struct Streams {
+  std::vector<std::uint8_t> flags;
+  std::size_t flag_bits = 0;
+  void flag(bool on) {
+    if (flag_bits % 8 == 0) flags.push_back(0);
+    if (on) flags.back() |= static_cast<std::uint8_t>(1u << (flag_bits % 8));
+    ++flag_bits;
+  }
   std::vector<std::uint8_t> ops, ids;
   std::vector<std::uint32_t> positions, deltas;
   Index previous_id = 0;
@@ -42,11 +90,19 @@ struct Streams {
     for (float c : p) positions.push_back(std::bit_cast<std::uint32_t>(c));
   }
   void move(const Point& from, const Point& to) {
+    for (int k = 0; k < 3; ++k) deltas.push_back(zigzag_delta(from[k], to[k]));
+  }
+  // A move coded against whichever of the current position and the umbrella prediction is
+  // closer (one flag bit a vertex says which).
+  void predicted_move(const Point& current, const Point& predicted, const Point& to) {
+    std::uint32_t plain = 0, guessed = 0;
     for (int k = 0; k < 3; ++k) {
-      auto d = static_cast<std::int32_t>(std::bit_cast<std::uint32_t>(to[k]) -
-                                         std::bit_cast<std::uint32_t>(from[k]));
-      deltas.push_back((static_cast<std::uint32_t>(d) << 1) ^ static_cast<std::uint32_t>(d >> 31));
+      plain = std::max(plain, zigzag_delta(current[k], to[k]));
+      guessed = std::max(guessed, zigzag_delta(predicted[k], to[k]));
     }
+    bool use_prediction = guessed < plain;
+    flag(use_prediction);
+    move(use_prediction ? predicted : current, to);
   }
 };
 
@@ -93,8 +149,9 @@ std::uint8_t opcode(const Edit& e) { return static_cast<std::uint8_t>(e.index())
 class Reader {
  public:
   Reader(std::span<const std::uint8_t> ops, std::span<const std::uint8_t> ids,
-         std::span<const std::uint8_t> positions, std::span<const std::uint8_t> deltas)
-      : ops_(ops), ids_(ids), positions_(positions), deltas_(deltas) {
+         std::span<const std::uint8_t> positions, std::span<const std::uint8_t> deltas,
+         std::span<const std::uint8_t> flags)
+      : ops_(ops), ids_(ids), positions_(positions), deltas_(deltas), flags_(flags) {
     if (positions.size() % 12 || deltas.size() % 12)
       throw InvalidInput("correction: position streams are not whole float triples");
   }
@@ -138,9 +195,15 @@ class Reader {
     }
     return p;
   }
+  bool flag() {
+    if (flag_at_ / 8 >= flags_.size()) throw InvalidInput("correction: truncated flag stream");
+    bool on = (flags_[flag_at_ / 8] >> (flag_at_ % 8)) & 1;
+    ++flag_at_;
+    return on;
+  }
   bool finished() const {
     return op_at_ == ops_.size() && id_at_ == ids_.size() && pos_at_ * 4 == positions_.size() &&
-           delta_at_ * 4 == deltas_.size();
+           delta_at_ * 4 == deltas_.size() && (flag_at_ + 7) / 8 == flags_.size();
   }
 
  private:
@@ -148,8 +211,8 @@ class Reader {
     return planes[i] | planes[n + i] << 8 | planes[2 * n + i] << 16 |
            static_cast<std::uint32_t>(planes[3 * n + i]) << 24;
   }
-  std::span<const std::uint8_t> ops_, ids_, positions_, deltas_;
-  std::size_t op_at_ = 0, id_at_ = 0, pos_at_ = 0, delta_at_ = 0;
+  std::span<const std::uint8_t> ops_, ids_, positions_, deltas_, flags_;
+  std::size_t op_at_ = 0, id_at_ = 0, pos_at_ = 0, delta_at_ = 0, flag_at_ = 0;
   Index previous_id_ = 0;
 };
 
@@ -194,7 +257,8 @@ Parsed parse(std::span<const std::uint8_t> bytes) {
 
 // Decodes edit after edit, applying each to `mesh` (moves are relative to current positions).
 void decode_into(const Parsed& parsed, EditMesh& mesh, EditList* edits) {
-  Reader in(parsed.streams[kOps], parsed.streams[kIds], parsed.streams[kPositions], parsed.streams[kDeltas]);
+  Reader in(parsed.streams[kOps], parsed.streams[kIds], parsed.streams[kPositions], parsed.streams[kDeltas],
+            parsed.streams[kFlags]);
   for (std::uint32_t i = 0; i < parsed.header.edit_count; ++i) {
     std::uint8_t code = in.op();
     bool has_point = code & kHasPoint;
@@ -219,10 +283,15 @@ void decode_into(const Parsed& parsed, EditMesh& mesh, EditList* edits) {
       case 6: {
         std::uint64_t count = in.varint();
         if (count > mesh.vertex_slots()) throw InvalidInput("correction: MoveAllVertices count exceeds the vertices");
+        std::vector<Point> predicted = umbrella_predictions(mesh);
+        if (count != predicted.size()) throw InvalidInput("correction: MoveAllVertices count is not the live vertex count");
         std::vector<Point> positions;
         positions.reserve(count);
         for (std::size_t v = 0; v < mesh.vertex_slots() && positions.size() < count; ++v)
-          if (mesh.vertex_alive(static_cast<Index>(v))) positions.push_back(in.moved(mesh.position(static_cast<Index>(v))));
+          if (mesh.vertex_alive(static_cast<Index>(v))) {
+            const Point& guess = predicted[positions.size()];
+            positions.push_back(in.moved(in.flag() ? guess : mesh.position(static_cast<Index>(v))));
+          }
         edit = MoveAllVertices{std::move(positions)};
         break;
       }
@@ -262,9 +331,15 @@ std::vector<std::uint8_t> encode_correction(const mesh::Mesh& base, const std::s
             s.move(mesh.position(e.v), e.p);
           } else if constexpr (std::is_same_v<E, MoveAllVertices>) {
             s.varint(e.positions.size());
+            std::vector<Point> predicted = umbrella_predictions(mesh);
+            if (predicted.size() != e.positions.size())
+              throw InvalidInput("edit " + std::to_string(i) + ": MoveAllVertices count is not the live vertex count");
             std::size_t k = 0;
             for (std::size_t v = 0; v < mesh.vertex_slots() && k < e.positions.size(); ++v)
-              if (mesh.vertex_alive(static_cast<Index>(v))) s.move(mesh.position(static_cast<Index>(v)), e.positions[k++]);
+              if (mesh.vertex_alive(static_cast<Index>(v))) {
+                s.predicted_move(mesh.position(static_cast<Index>(v)), predicted[k], e.positions[k]);
+                ++k;
+              }
           } else if constexpr (std::is_same_v<E, AddEdge> || std::is_same_v<E, SwapEdge>) { s.id(e.a); s.id(e.b); }
           else if constexpr (std::is_same_v<E, CollapseEdge> || std::is_same_v<E, SplitEdge>) {
             s.id(e.a); s.id(e.b);
@@ -279,7 +354,7 @@ std::vector<std::uint8_t> encode_correction(const mesh::Mesh& base, const std::s
   std::vector<std::uint8_t> positions, deltas;
   append_planes(positions, s.positions);
   append_planes(deltas, s.deltas);
-  const std::vector<std::uint8_t>* streams[kStreams] = {&s.ops, &s.ids, &positions, &deltas};
+  const std::vector<std::uint8_t>* streams[kStreams] = {&s.ops, &s.ids, &positions, &deltas, &s.flags};
   for (auto* stream : streams) put_u64(payload, stream->size());
   for (auto* stream : streams) payload.insert(payload.end(), stream->begin(), stream->end());
 

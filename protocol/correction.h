@@ -4,9 +4,11 @@
 //
 // Layout: "MFC1" magic, version byte (1), 32-byte SHA-256 of the base, 32-byte SHA-256 of the
 // result, u64 payload size, u32 edit count, then one zstd frame holding five streams (opcodes;
-// varint ids, delta-coded; raw float32 positions; zigzag float32 bit deltas for moves, relative
-// to the vertex's current position; flags), positions and deltas split into byte planes so that
-// small moves compress to little. The encoder is deterministic. Decoding is safe for untrusted
+// varint ids, delta-coded; raw float32 positions; zigzag float32 bit deltas for moves; flags),
+// positions and deltas split into byte planes so that small moves compress to little. A move
+// is coded against the vertex's current position, or, in MoveAllVertices, against the umbrella
+// prediction (the average of its current neighbours) when that is closer: one flag bit a vertex
+// says which. Both sides compute the prediction on the same mesh state, so it is lossless. The encoder is deterministic. Decoding is safe for untrusted
 // input: bad magic, unknown version, truncation, trailing bytes and absurd counts are refused
 // with InvalidInput, never a crash.
 
