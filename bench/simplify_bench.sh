@@ -41,6 +41,7 @@ mlx() {  # mlx FACES -> script path
   <Param type="RichBool" value="false" name="PreserveTopology"/>
   <Param type="RichBool" value="true" name="OptimalPlacement"/>
   <Param type="RichBool" value="false" name="PlanarQuadric"/>
+  <Param type="RichFloat" value="0.001" name="PlanarWeight"/>
   <Param type="RichBool" value="false" name="QualityWeight"/>
   <Param type="RichBool" value="true" name="AutoClean"/>
   <Param type="RichBool" value="false" name="Selected"/>
@@ -59,7 +60,7 @@ run() {  # run OUTPUT CMD... ; prints "seconds MB vertices mean_error" or "faile
   read s kb <"$OUT/t.txt"
   local nv err
   nv=$("$MF" op NumberOfVertices "$out" 2>/dev/null || echo "?")
-  err=$("$MF" compare "$IN" "$out" --json 2>/dev/null | python3 -c 'import json,sys; d=json.load(sys.stdin); print(f"{(d[\"mean_ab\"]+d[\"mean_ba\"])/2:.5f}")' 2>/dev/null || echo "?")
+  err=$("$MF" compare "$IN" "$out" --json 2>/dev/null | python3 -c 'import json,sys; d=json.load(sys.stdin); print("%.5f" % ((d["mean_ab"] + d["mean_ba"]) / 2))' 2>/dev/null || echo "?")
   echo "$s $((kb / 1024)) $nv $err"
 }
 
