@@ -1,0 +1,35 @@
+#pragma once
+// The engine's one way to reach nodes (DESIGN §2): run an atomic operation on the workflow's
+// current mesh, or evaluate an analysis operation on it. Implementations keep the current
+// mesh: in this process (InProcessNode, for `meshflow run`) or on HTTP nodes (the hub's jobs).
+
+#include <cstdint>
+#include <string>
+
+#include "services/operation.h"
+
+namespace meshflow::engine {
+
+struct StepReport {
+  std::string operation;
+  std::string node = "in-process";
+  std::int64_t run_ms = 0;
+  std::int64_t transfer_ms = 0;   // forwarding the result to the other nodes
+  std::int64_t update_ms = 0;     // the other nodes applying it
+  std::string sent;               // "correction" or "output" ("" when nothing was forwarded)
+  std::uint64_t correction_bytes = 0;
+  std::uint64_t output_bytes = 0;
+  bool is_analysis = false;
+  double value = 0;               // analysis steps
+};
+
+class NodeClient {
+ public:
+  virtual ~NodeClient() = default;
+  // Runs `operation` on the current mesh, which becomes its output.
+  virtual StepReport run_atomic(const std::string& operation, const services::Params& params) = 0;
+  // Evaluates an analysis operation on the current mesh.
+  virtual StepReport run_analysis(const std::string& operation) = 0;
+};
+
+}  // namespace meshflow::engine
