@@ -44,7 +44,9 @@ fuzz: deps
 up: build
 	scripts/up.sh $(BUILD)/meshflow
 
-bench: deps-bench build
+bench: deps-bench $(BUILD)/build.ninja
+	cmake -S . -B $(BUILD) -DMESHFLOW_BUILD_BENCHMARKS=ON
+	cmake --build $(BUILD) -j $(JOBS)
 	bench/run.sh $(BUILD)/meshflow
 
 format:
