@@ -1,0 +1,110 @@
+#include "engine/workflow_parser.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+
+#include "engine/validate.h"
+#include "mesh/errors.h"
+#include "services/operation.h"
+
+namespace meshflow::engine {
+namespace {
+
+const char* kRepair = R"(<?xml version="1.0" encoding="utf-8"?>
+<workflow>
+  <input> http://example.org/bunny.ply </input>
+  <body>
+    <if><condition><analysis><name>NumberOfComponents</name><operator>GT</operator><value>1</value></analysis></condition>
+      <body><atomic><name>RemoveSmallestComponents</name></atomic></body>
+      <else><atomic><name>AddNoise</name><parameters><parameter name="seed">4</parameter><parameter name="maxDistance">0.2</parameter></parameters></atomic></else></if>
+    <while><condition><analysis><name>IsWatertight</name><operator>NEQ</operator><value>true</value></analysis></condition>
+      <body><atomic><name>FillHoles</name></atomic></body></while>
+    <atomic><name> LaplacianSmoothing </name><parameters><parameter>3</parameter></parameters></atomic>
+  </body>
+</workflow>)";
+
+std::string error_of(const std::string& xml) {
+  try {
+    Workflow w = parse_workflow(xml, "w.xml");
+    validate_workflow(w, "w.xml", services::operation_specs());
+  } catch (const ParseError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(WorkflowParser, ReadsTheThesisGrammar) {
+  Workflow w = parse_workflow(kRepair, "repair.xml");
+  ASSERT_TRUE(w.input_url);
+  EXPECT_EQ(*w.input_url, "http://example.org/bunny.ply");
+  ASSERT_EQ(w.body.size(), 3u);
+  EXPECT_EQ(w.body[0].kind, Task::Kind::If);
+  EXPECT_EQ(w.body[0].condition.analysis, "NumberOfComponents");
+  EXPECT_EQ(w.body[0].condition.op, "GT");
+  EXPECT_EQ(w.body[0].else_body.size(), 1u);
+  EXPECT_EQ(w.body[1].kind, Task::Kind::While);
+  EXPECT_EQ(w.body[2].name, "LaplacianSmoothing");  // trimmed
+  EXPECT_EQ(w.body[2].at.line, 10);
+  ValidatedWorkflow v = validate_workflow(w, "repair.xml", services::operation_specs());
+  EXPECT_EQ(v.params.at(&w.body[2]).at("iterations"), 3);
+  EXPECT_EQ(v.params.at(&w.body[0].else_body[0]).at("seed"), 4);
+  EXPECT_EQ(v.condition_values.at(&w.body[1]), 1);  // true
+  EXPECT_EQ(operations_used(w), (std::vector<std::string>{"NumberOfComponents", "RemoveSmallestComponents",
+                                                          "AddNoise", "IsWatertight", "FillHoles",
+                                                          "LaplacianSmoothing"}));
+}
+
+TEST(WorkflowParser, ErrorsNameLineColumnAndReason) {
+  EXPECT_NE(error_of("<workflow><body><atomic><name>Smoth</name></atomic></body></workflow>")
+                .find("w.xml:1:25: <atomic> names unknown operation 'Smoth' (known: RemoveSmallestComponents"),
+            std::string::npos);
+  EXPECT_NE(error_of("<workflow><body>\n<atomic><name>LaplacianSmoothing</name><parameters><parameter>-2</parameter>"
+                     "</parameters></atomic></body></workflow>")
+                .find("w.xml:2:9: LaplacianSmoothing: parameter iterations=-2: must be >= 1"),
+            std::string::npos);
+  EXPECT_NE(error_of("<workflow><body><atomic><name>AddNoise</name><parameters><parameter>1</parameter>"
+                     "<parameter name=\"seed\">2</parameter></parameters></atomic></body></workflow>")
+                .find("all positional or all named"),
+            std::string::npos);
+  EXPECT_NE(error_of("<workflow><body><if><condition><analysis><name>IsManifold</name><operator>GT</operator>"
+                     "</analysis></condition><body/></if></body></workflow>")
+                .find("only EQ and NEQ"),
+            std::string::npos);
+  EXPECT_NE(error_of("<workflow><body><if><condition><analysis><name>NumberOfVertices</name><value>1.5</value>"
+                     "</analysis></condition><body/></if></body></workflow>")
+                .find("'1.5' is not one"),
+            std::string::npos);
+  EXPECT_NE(error_of("<workflow><body><atomic><name>NumberOfEdges</name></atomic></body></workflow>")
+                .find("is an analysis operation"),
+            std::string::npos);
+  // Not the grammar: the XSD says so, with a position.
+  std::string e = error_of("<workflow><body><loop/></body></workflow>");
+  EXPECT_NE(e.find("w.xml:1:"), std::string::npos) << e;
+  e = error_of("<workflow><body><atomic><name>Simplify</name></atomic>");
+  EXPECT_NE(e.find("w.xml:1:"), std::string::npos) << e;
+  EXPECT_NE(error_of("").find("w.xml"), std::string::npos);
+}
+
+TEST(WorkflowParser, RefusesExternalEntitiesAndEntityBombs) {
+  std::string xxe = "<?xml version=\"1.0\"?>\n<!DOCTYPE workflow [ <!ENTITY x SYSTEM \"file:///etc/passwd\"> ]>\n"
+                    "<workflow><body><atomic><name>&x;</name></atomic></body></workflow>";
+  std::string e = error_of(xxe);
+  EXPECT_NE(e, "");
+  EXPECT_EQ(e.find("root:"), std::string::npos);
+  std::string bomb = "<?xml version=\"1.0\"?><!DOCTYPE workflow [<!ENTITY a \"aaaaaaaaaa\">";
+  std::string previous = "a";
+  for (char c = 'b'; c <= 'j'; ++c) {
+    bomb += std::string("<!ENTITY ") + c + " \"";
+    for (int i = 0; i < 10; ++i) bomb += "&" + previous + ";";
+    bomb += "\">";
+    previous = std::string(1, c);
+  }
+  bomb += "]><workflow><body><atomic><name>&j;</name></atomic></body></workflow>";
+  auto start = std::chrono::steady_clock::now();
+  EXPECT_NE(error_of(bomb), "");
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(5));
+}
+
+}  // namespace
+}  // namespace meshflow::engine
