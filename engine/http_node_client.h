@@ -35,6 +35,11 @@ class HttpNodeClient : public NodeClient {
   StepReport run_atomic(const std::string& operation, const services::Params& params) override;
   StepReport run_analysis(const std::string& operation) override;
   const std::string& current_url() const { return current_url_; }
+  // Resuming a job: the mesh after the last finished step is already on the nodes.
+  void set_current(std::string url, std::string sha256) {
+    current_url_ = std::move(url);
+    current_sha_ = std::move(sha256);
+  }
   const std::string& current_sha256() const { return current_sha_; }
 
  private:

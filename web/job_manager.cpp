@@ -19,12 +19,62 @@ namespace meshflow::web {
 
 using nlohmann::json;
 
+namespace {
+
+// Resuming after a hub restart: the executor is deterministic given the steps' answers, so
+// the steps the journal already holds are answered from it (the mesh after the last finished
+// atomic step is still on the nodes) and the rest run live.
+class ReplayingNodes : public engine::NodeClient {
+ public:
+  ReplayingNodes(std::vector<engine::StepRecord> done, engine::HttpNodeClient& live)
+      : done_(std::move(done)), live_(live) {}
+  engine::StepReport run_atomic(const std::string& operation, const services::Params& params) override {
+    if (const engine::StepRecord* r = next(operation)) {
+      if (!r->output_url.empty()) live_.set_current(r->output_url, r->output_sha256);
+      return report_of(*r);
+    }
+    return live_.run_atomic(operation, params);
+  }
+  engine::StepReport run_analysis(const std::string& operation) override {
+    if (const engine::StepRecord* r = next(operation)) return report_of(*r);
+    return live_.run_analysis(operation);
+  }
+  std::size_t replayed() const { return at_; }
+
+ private:
+  const engine::StepRecord* next(const std::string& operation) {
+    if (at_ >= done_.size() || done_[at_].operation != operation) {
+      at_ = done_.size();  // anything unexpected: run live from here
+      return nullptr;
+    }
+    return &done_[at_++];
+  }
+  static engine::StepReport report_of(const engine::StepRecord& r) {
+    engine::StepReport report;
+    report.operation = r.operation;
+    report.node = r.node;
+    report.run_ms = r.run_ms;
+    report.transfer_ms = r.transfer_ms;
+    report.update_ms = r.update_ms;
+    report.sent = r.sent;
+    report.correction_bytes = r.correction_bytes;
+    report.output_bytes = r.output_bytes;
+    report.is_analysis = r.kind == "analysis";
+    report.value = r.value.value_or(0);
+    return report;
+  }
+  std::vector<engine::StepRecord> done_;
+  engine::HttpNodeClient& live_;
+  std::size_t at_ = 0;
+};
+
+}  // namespace
+
 JobManager::JobManager(std::filesystem::path data_dir, ServiceRegistry& services, std::string token, int workers)
     : data_dir_(std::move(data_dir)), services_(services), token_(std::move(token)),
       journal_(data_dir_ / "jobs.sqlite") {
   std::filesystem::create_directories(data_dir_ / "jobs");
-  // Jobs a previous hub left unfinished start again from their input (their journaled steps
-  // are replaced as they rerun).
+  // Jobs a previous hub left unfinished go on from their last finished step (run()).
   for (const auto& id : journal_.unfinished()) queue_.push_back(id), cancel_[id] = std::make_shared<std::atomic<bool>>(false);
   for (int i = 0; i < workers; ++i) workers_.emplace_back([this] { worker(); });
 }
@@ -118,8 +168,12 @@ void JobManager::run(const std::string& id) {
     mesh::Mesh input = mesh::read_mesh(job->input_path);
     options.reference_diagonal = mesh::bounding_box(input).diagonal();
     std::string input_url = hub_url_ + "/api/jobs/" + id + "/input";
-    engine::HttpNodeClient nodes(options, input_url, job->input_sha256);
-    nodes.broadcast_input();
+    engine::HttpNodeClient live(options, input_url, job->input_sha256);
+    live.broadcast_input();
+    std::vector<engine::StepRecord> done;
+    for (const auto& s : job->steps)
+      if (s.state == "done") done.push_back(s);
+    ReplayingNodes nodes(done, live);
     int seq = 0;
     engine::ExecutorOptions exec;
     exec.cancelled = [cancelled] { return cancelled->load(); };
@@ -137,8 +191,8 @@ void JobManager::run(const std::string& id) {
       s.correction_bytes = r.correction_bytes;
       s.output_bytes = r.output_bytes;
       if (r.is_analysis) s.value = r.value;
-      s.output_sha256 = nodes.current_sha256();
-      s.output_url = nodes.current_url();
+      s.output_sha256 = live.current_sha256();
+      s.output_url = live.current_url();
       journal_.put_step(id, s);
     };
     engine::execute(valid, nodes, exec);
@@ -147,12 +201,12 @@ void JobManager::run(const std::string& id) {
     protocol::HttpOptions http;
     http.timeout = std::chrono::minutes(30);
     protocol::DownloadResult got =
-        protocol::http_download(nodes.current_url(), fetched.string(), nodes.current_sha256(), true, http);
-    if (!got.ok()) throw IoError("fetching the result from " + nodes.current_url() + ": " + got.describe());
+        protocol::http_download(live.current_url(), fetched.string(), live.current_sha256(), true, http);
+    if (!got.ok()) throw IoError("fetching the result from " + live.current_url() + ": " + got.describe());
     mesh::Mesh output = mesh::read_mesh(fetched.string());
     mesh::write_mesh(output, output_file(id).string());
     std::filesystem::remove(fetched);
-    journal_.set_output(id, output_file(id).string(), nodes.current_sha256());
+    journal_.set_output(id, output_file(id).string(), live.current_sha256());
     journal_.set_state(id, engine::JobState::Done);
   } catch (const std::exception& e) {
     journal_.set_state(id, cancelled->load() ? engine::JobState::Cancelled : engine::JobState::Failed, e.what());

@@ -137,5 +137,47 @@ TEST(Hub, AStepOnADeadNodeRunsAgainOnAnother) {
   for (const auto& step : job["steps"]) EXPECT_EQ(step["node"], b_url) << job.dump();
 }
 
+TEST(Hub, ARestartedHubGoesOnFromTheLastFinishedStep) {
+  TempDir dir;
+  auto hub_process = std::make_unique<ChildProcess>(
+      std::vector<std::string>{MESHFLOW_BINARY, "hub", "--port", "0", "--data", dir.file("hub")});
+  std::string hub = hub_process->ready_url();
+  ASSERT_FALSE(hub.empty());
+  std::string port = hub.substr(hub.rfind(':') + 1);
+  std::string token = dir.file("hub") + "/node.token";
+  ChildProcess a({MESHFLOW_BINARY, "node", "--hub", hub, "--token-file", token, "--data", dir.file("a")});
+  ChildProcess b({MESHFLOW_BINARY, "node", "--hub", hub, "--token-file", token, "--data", dir.file("b")});
+  ASSERT_FALSE(a.ready_url().empty());
+  ASSERT_FALSE(b.ready_url().empty());
+  std::string xml = "<workflow><body>";
+  for (int i = 0; i < 16; ++i) xml += "<atomic><name>LaplacianSmoothing</name><parameters><parameter>2</parameter></parameters></atomic>";
+  xml += "</body></workflow>";
+  std::string id = submit(hub, dir, xml, shared_meshes() + "/real/igea_tristrips.ply");
+  ASSERT_FALSE(id.empty());
+  // Wait for a few finished steps, then kill the hub outright.
+  std::size_t before = 0;
+  for (int i = 0; i < 600 && before < 3; ++i) {
+    auto job = json::parse(protocol::http_request("GET", hub + "/api/jobs/" + id).body, nullptr, false);
+    before = job.is_object() ? job["steps"].size() : 0;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_GE(before, 3u);
+  hub_process->kill_now();
+  hub_process = std::make_unique<ChildProcess>(
+      std::vector<std::string>{MESHFLOW_BINARY, "hub", "--port", port, "--data", dir.file("hub")});
+  ASSERT_EQ(hub_process->ready_url(), hub);
+  json job = wait_for(hub, id);
+  ASSERT_EQ(job["state"], "done") << job.dump();
+  EXPECT_EQ(job["steps"].size(), 16u);
+  auto got = protocol::http_download(hub + "/api/jobs/" + id + "/output", dir.file("out.ply"));
+  ASSERT_TRUE(got.ok()) << got.describe();
+  // The same result as an uninterrupted in-process run.
+  std::ofstream(dir.file("w.xml")) << xml;
+  std::string command = std::string(MESHFLOW_BINARY) + " run " + dir.file("w.xml") + " " + shared_meshes() +
+                        "/real/igea_tristrips.ply -o " + dir.file("ref.ply") + " 2>/dev/null";
+  ASSERT_EQ(std::system(command.c_str()), 0);
+  EXPECT_EQ(mesh::read_mesh(dir.file("out.ply")), mesh::read_mesh(dir.file("ref.ply")));
+}
+
 }  // namespace
 }  // namespace meshflow
