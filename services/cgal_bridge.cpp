@@ -51,21 +51,39 @@ HoleFill fill_holes(const mesh::Mesh& input, bool skip_largest) {
     }
     polygons.push_back(std::move(polygon));
   }
-  std::size_t original_points = points.size();
-  // Non-manifold vertices are duplicated by orient_polygon_soup (appended points); a polygon
-  // it had to reverse is reversed back for our purposes by checking the fill's orientation.
-  if (!PMP::is_polygon_soup_a_polygon_mesh(polygons)) PMP::orient_polygon_soup(points, polygons);
-  // Map duplicated points back to the vertex they copy (same coordinates).
-  std::map<std::array<double, 3>, Index> by_position;
-  for (std::size_t i = 0; i < original_points; ++i)
-    by_position.emplace(std::array<double, 3>{points[i].x(), points[i].y(), points[i].z()}, soup_to_mesh[i]);
-  for (std::size_t i = original_points; i < points.size(); ++i) {
-    auto it = by_position.find({points[i].x(), points[i].y(), points[i].z()});
-    soup_to_mesh.push_back(it != by_position.end() ? it->second : 0);
+  // Non-manifold vertices are duplicated by orient_polygon_soup (appended points); the visitor
+  // says which vertex each copy comes from. (Matching copies by position would send a copy to
+  // another vertex at the same place: scans have such unwelded twins.)
+  if (!PMP::is_polygon_soup_a_polygon_mesh(polygons)) {
+    struct DuplicationVisitor : PMP::Default_orientation_visitor {
+      std::vector<Index>* soup_to_mesh;
+      void duplicated_vertex(std::size_t original, std::size_t copy) {
+        if (soup_to_mesh->size() <= copy) soup_to_mesh->resize(copy + 1);
+        (*soup_to_mesh)[copy] = (*soup_to_mesh)[original];
+      }
+    } visitor;
+    visitor.soup_to_mesh = &soup_to_mesh;
+    PMP::orient_polygon_soup(points, polygons, CGAL::parameters::visitor(visitor));
   }
   SurfaceMesh sm;
   PMP::polygon_soup_to_polygon_mesh(points, polygons, sm);
   std::size_t soup_vertices = sm.number_of_vertices();
+
+  // Edges used by exactly one triangle of the input. Where the soup had to be cut (at
+  // non-manifold or unorientable edges) the halfedge copy has border cycles along edges that
+  // are no boundary at all; a cycle with no boundary edge is such a cut, not a hole.
+  std::vector<std::uint64_t> edge_keys;
+  for (const auto& polygon : polygons)
+    for (std::size_t k = 0; k < 3; ++k) {
+      Index a = soup_to_mesh[polygon[k]], b = soup_to_mesh[polygon[(k + 1) % 3]];
+      edge_keys.push_back(std::uint64_t{std::min(a, b)} << 32 | std::max(a, b));
+    }
+  std::sort(edge_keys.begin(), edge_keys.end());
+  auto is_boundary_edge = [&](Index a, Index b) {
+    auto key = std::uint64_t{std::min(a, b)} << 32 | std::max(a, b);
+    auto [first, last] = std::equal_range(edge_keys.begin(), edge_keys.end(), key);
+    return last - first == 1;
+  };
 
   // One border halfedge per hole, with its length in edges.
   std::vector<std::pair<std::size_t, SurfaceMesh::Halfedge_index>> holes;
@@ -73,8 +91,12 @@ HoleFill fill_holes(const mesh::Mesh& input, bool skip_largest) {
   for (auto h : sm.halfedges()) {
     if (!sm.is_border(h) || visited[h.idx()]) continue;
     std::size_t length = 0;
-    for (auto g : CGAL::halfedges_around_face(h, sm)) visited[g.idx()] = true, ++length;
-    holes.emplace_back(length, h);
+    bool is_hole = false;
+    for (auto g : CGAL::halfedges_around_face(h, sm)) {
+      visited[g.idx()] = true, ++length;
+      is_hole = is_hole || is_boundary_edge(soup_to_mesh[sm.source(g).idx()], soup_to_mesh[sm.target(g).idx()]);
+    }
+    if (is_hole) holes.emplace_back(length, h);
   }
   if (skip_largest && !holes.empty()) {
     auto largest = std::max_element(holes.begin(), holes.end(),
@@ -82,13 +104,31 @@ HoleFill fill_holes(const mesh::Mesh& input, bool skip_largest) {
     holes.erase(largest);
   }
   std::vector<SurfaceMesh::Face_index> new_faces;
+  std::vector<mesh::Triangle> loop_patches;  // mesh ids, for loops CGAL could not fill in place
   for (auto& [length, h] : holes) {
     std::vector<SurfaceMesh::Face_index> faces;
     std::vector<SurfaceMesh::Vertex_index> vertices;
     bool fair_ok = std::get<0>(PMP::triangulate_refine_and_fair_hole(
         sm, h, std::back_inserter(faces), std::back_inserter(vertices)));
-    if (!fair_ok && faces.empty()) {
+    if (!fair_ok && faces.empty())
       PMP::triangulate_and_refine_hole(sm, h, std::back_inserter(faces), std::back_inserter(vertices));
+    if (faces.empty()) PMP::triangulate_hole(sm, h, std::back_inserter(faces));
+    if (faces.empty()) {
+      // Every triangulation inside the mesh would repeat an edge it already has (loops of
+      // unwelded or pinched input): triangulate the loop as a polyline, outside the halfedge
+      // copy; the patch then shares those edges, as non-manifold input may.
+      std::vector<P3> polyline;
+      std::vector<Index> loop;
+      for (auto g : CGAL::halfedges_around_face(h, sm)) {
+        polyline.push_back(sm.point(sm.source(g)));
+        loop.push_back(soup_to_mesh[sm.source(g).idx()]);
+      }
+      std::vector<CGAL::Triple<int, int, int>> patch;
+      PMP::triangulate_hole_polyline(polyline, std::back_inserter(patch));
+      for (const auto& t : patch) {
+        mesh::Triangle tri{loop[t.first], loop[t.second], loop[t.third]};
+        if (tri[0] != tri[1] && tri[1] != tri[2] && tri[0] != tri[2]) loop_patches.push_back(tri);
+      }
     }
     new_faces.insert(new_faces.end(), faces.begin(), faces.end());
   }
@@ -109,6 +149,7 @@ HoleFill fill_holes(const mesh::Mesh& input, bool skip_largest) {
     }
     if (k == 3) out.triangles.push_back(t);
   }
+  out.triangles.insert(out.triangles.end(), loop_patches.begin(), loop_patches.end());
   return out;
 }
 

@@ -24,7 +24,8 @@ struct HoleFill {
 };
 
 // Fills boundary loops with Liepa's method (CGAL triangulate_refine_and_fair_hole; falling
-// back to triangulate+refine, then to a plain triangulation, where fairing fails). Loops are
+// back to triangulate+refine, then to a plain triangulation, then to a triangulation of the
+// loop as a polyline where every triangulation inside the mesh would repeat an edge). Loops are
 // found on a halfedge copy of the referenced triangles (non-manifold vertices duplicated);
 // `skip_largest` leaves the loop with the most edges open (height fields).
 HoleFill fill_holes(const mesh::Mesh& mesh, bool skip_largest);
