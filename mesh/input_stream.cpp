@@ -54,12 +54,10 @@ class MemorySource : public ByteSource {
 // Gzip (possibly several members) over another source.
 class GzipSource : public ByteSource {
  public:
-  GzipSource(std::unique_ptr<ByteSource> inner, std::string prefix, std::string name)
-      : inner_(std::move(inner)), in_(std::move(prefix)), name_(std::move(name)) {
+  GzipSource(std::unique_ptr<ByteSource> inner, std::string name)
+      : inner_(std::move(inner)), in_(kChunk, '\0'), name_(std::move(name)) {
     std::memset(&z_, 0, sizeof z_);
     if (inflateInit2(&z_, 16 + MAX_WBITS) != Z_OK) throw IoError("zlib init failed");
-    in_.resize(std::max(in_.size(), kChunk));
-    in_used_ = std::min(in_.size(), prefix_size(in_));
   }
   ~GzipSource() override { inflateEnd(&z_); }
   std::size_t read(char* buffer, std::size_t size) override {
@@ -73,9 +71,9 @@ class GzipSource : public ByteSource {
           in_used_ = 0;
         } else {
           std::size_t n = inner_->read(in_.data(), kChunk);
+          compressed_ += n;
           if (n == 0) {
-            if (!finished_member_)
-              throw ParseError({name_, {}, {}, {}}, "truncated gzip stream");
+            if (!finished_member_) fail("truncated gzip stream", "more compressed data", size);
             break;
           }
           z_.next_in = reinterpret_cast<Bytef*>(in_.data());
@@ -88,26 +86,34 @@ class GzipSource : public ByteSource {
         finished_member_ = true;
         inflateReset(&z_);  // a following member, if any
       } else if (rc != Z_OK && rc != Z_BUF_ERROR) {
-        throw ParseError({name_, {}, {}, {}}, std::string("corrupt gzip stream: ") +
-                                                  (z_.msg ? z_.msg : "inflate failed"));
+        fail(std::string("corrupt gzip stream (") + (z_.msg ? z_.msg : "inflate failed") + ")",
+             "valid deflate data", size);
       }
     }
+    produced_ += size - z_.avail_out;
     return size - z_.avail_out;
   }
 
  private:
-  static std::size_t prefix_size(const std::string&) { return 0; }
+  // Where: the byte of the decompressed content reached, and how far into the compressed file.
+  [[noreturn]] void fail(const std::string& what, const std::string& expected, std::size_t size) {
+    throw ParseError({name_, {}, {}, produced_ + (size - z_.avail_out)},
+                     what + " at compressed byte " + std::to_string(compressed_ - z_.avail_in) +
+                         ": expected " + expected);
+  }
   std::unique_ptr<ByteSource> inner_;
   std::string in_;
   std::size_t in_used_ = 0;
   z_stream z_;
   bool finished_member_ = false;
   std::string name_;
+  std::uint64_t compressed_ = 0, produced_ = 0;
 
  public:
   void set_prefix(const char* data, std::size_t n) {
     std::memcpy(in_.data(), data, n);
     in_used_ = n;
+    compressed_ = n;
   }
 };
 
@@ -123,24 +129,26 @@ class ZstdSource : public ByteSource {
     if (n > in_.size()) in_.resize(n);
     std::memcpy(in_.data(), data, n);
     input_ = {in_.data(), n, 0};
+    compressed_ = n;
   }
   std::size_t read(char* buffer, std::size_t size) override {
     ZSTD_outBuffer out{buffer, size, 0};
     while (out.pos < out.size) {
       if (input_.pos == input_.size) {
         std::size_t n = inner_->read(in_.data(), in_.size());
+        compressed_ += n;
         if (n == 0) {
-          if (!frame_done_) throw ParseError({name_, {}, {}, {}}, "truncated zstd stream");
+          if (!frame_done_) fail("truncated zstd stream", "more compressed data", out.pos);
           break;
         }
         input_ = {in_.data(), n, 0};
       }
       std::size_t rc = ZSTD_decompressStream(stream_, &out, &input_);
       if (ZSTD_isError(rc))
-        throw ParseError({name_, {}, {}, {}},
-                         std::string("corrupt zstd stream: ") + ZSTD_getErrorName(rc));
+        fail(std::string("corrupt zstd stream (") + ZSTD_getErrorName(rc) + ")", "a valid zstd frame", out.pos);
       frame_done_ = rc == 0;
     }
+    produced_ += out.pos;
     return out.pos;
   }
 
@@ -151,6 +159,14 @@ class ZstdSource : public ByteSource {
   ZSTD_DStream* stream_;
   bool frame_done_ = true;
   std::string name_;
+  std::uint64_t compressed_ = 0, produced_ = 0;
+
+  // Where: the byte of the decompressed content reached, and how far into the compressed file.
+  [[noreturn]] void fail(const std::string& what, const std::string& expected, std::size_t pending) {
+    throw ParseError({name_, {}, {}, produced_ + pending},
+                     what + " at compressed byte " + std::to_string(compressed_ - (input_.size - input_.pos)) +
+                         ": expected " + expected);
+  }
 };
 
 }  // namespace
@@ -193,7 +209,7 @@ void InputStream::detect_compression() {
   auto* b = reinterpret_cast<const unsigned char*>(buffer_.data());
   if (n >= 2 && b[0] == 0x1f && b[1] == 0x8b) {
     compression_ = Compression::Gzip;
-    auto gz = std::make_unique<GzipSource>(std::move(source_), std::string(), name_);
+    auto gz = std::make_unique<GzipSource>(std::move(source_), name_);
     gz->set_prefix(buffer_.data(), n);
     source_ = std::move(gz);
     known_size_ = -1;

@@ -40,6 +40,33 @@ std::size_t scalar_size(Scalar s) {
 
 bool is_integer(Scalar s) { return s != Scalar::Float32 && s != Scalar::Float64; }
 
+const char* scalar_name(Scalar s) {
+  switch (s) {
+    case Scalar::Int8: return "char";
+    case Scalar::UInt8: return "uchar";
+    case Scalar::Int16: return "short";
+    case Scalar::UInt16: return "ushort";
+    case Scalar::Int32: return "int";
+    case Scalar::UInt32: return "uint";
+    case Scalar::Float32: return "float";
+    case Scalar::Float64: return "double";
+  }
+  return "?";
+}
+
+// Whether an integer read from ASCII text fits the property's declared integer type.
+bool fits(Scalar s, std::int64_t v) {
+  switch (s) {
+    case Scalar::Int8: return v >= -128 && v <= 127;
+    case Scalar::UInt8: return v >= 0 && v <= 255;
+    case Scalar::Int16: return v >= -32768 && v <= 32767;
+    case Scalar::UInt16: return v >= 0 && v <= 65535;
+    case Scalar::Int32: return v >= -2147483648ll && v <= 2147483647ll;
+    case Scalar::UInt32: return v >= 0 && v <= 4294967295ll;
+    default: return true;
+  }
+}
+
 struct Property {
   std::string name;
   bool is_list = false;
@@ -104,11 +131,14 @@ double decode(Scalar s, const char* p, bool swap) {
 class AsciiTokens {
  public:
   explicit AsciiTokens(InputStream& in) : in_(in) {}
-  std::string_view next(const char* what) {
+  // The next token of record `record` of element `element` (named in the error at the end).
+  std::string_view next(const std::string& element, std::uint64_t record, std::uint64_t count) {
     for (;;) {
       std::string_view token = next_token(line_);
       if (!token.empty()) return token;
-      if (!in_.next_line(line_)) in_.fail_line(std::string("unexpected end of file in ") + what);
+      if (!in_.next_line(line_))
+        in_.fail_line("unexpected end of file in element " + element + " " + std::to_string(record) + " of " +
+                      std::to_string(count) + ": expected more values");
     }
   }
   // The rest of the current record's line must be empty (a record is one line in practice;
@@ -299,10 +329,10 @@ struct PlyReader {
         std::uint64_t items = 1;
         if (p.is_list) {
           std::int64_t n = 0;
-          std::string_view token = tokens.next(e.name.c_str());
-          if (!parse_int(token, n) || n < 0)
-            in.fail_line("element " + e.name + " " + std::to_string(r) + ": expected a list count, found '" +
-                         std::string(token.substr(0, 20)) + "'");
+          std::string_view token = tokens.next(e.name, r, e.count);
+          if (!parse_int(token, n) || n < 0 || !fits(p.count_type, n))
+            in.fail_line("element " + e.name + " " + std::to_string(r) + ": expected a list count (" +
+                         scalar_name(p.count_type) + "), found '" + std::string(token.substr(0, 20)) + "'");
           items = static_cast<std::uint64_t>(n);
           if (pi == il) {
             polygon.clear();
@@ -310,19 +340,20 @@ struct PlyReader {
           }
         }
         for (std::uint64_t k = 0; k < items; ++k) {
-          std::string_view token = tokens.next(e.name.c_str());
+          std::string_view token = tokens.next(e.name, r, e.count);
           double value = 0;
           bool ok;
           if (is_integer(p.type)) {
             std::int64_t v = 0;
-            ok = parse_int(token, v);
+            ok = parse_int(token, v) && fits(p.type, v);
             value = static_cast<double>(v);
           } else {
             ok = parse_float(token, value);
           }
           if (!ok)
             in.fail_line("element " + e.name + " " + std::to_string(r) + ": property '" + p.name +
-                         "' expects a number, found '" + std::string(token.substr(0, 20)) + "'");
+                         "' expects a number (" + scalar_name(p.type) + "), found '" +
+                         std::string(token.substr(0, 20)) + "'");
           if (pi == ix) xyz[0] = value;
           else if (pi == iy) xyz[1] = value;
           else if (pi == iz) xyz[2] = value;

@@ -150,7 +150,8 @@ ReadInfo read_ascii(InputStream& in, MeshSink& sink) {
           for (double& v : c) {
             std::string_view token = next_token(rest);
             if (!parse_float(token, v))
-              in.fail_line("expected a vertex coordinate, found '" + std::string(token.substr(0, 20)) + "'");
+              in.fail_line("facet " + std::to_string(facets) + ": expected 3 coordinates after 'vertex', found '" +
+                           std::string(token.substr(0, 20)) + "'");
           }
           Point p{static_cast<float>(c[0]), static_cast<float>(c[1]), static_cast<float>(c[2])};
           check_finite(in, p, facets, true, 0);

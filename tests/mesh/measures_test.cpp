@@ -3,6 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <numbers>
+
 #include <nlohmann/json.hpp>
 
 #include "tests/support/meshes.h"
@@ -32,45 +35,92 @@ TEST(Measures, CubeIsAClosedOrientedManifoldOfVolumeOne) {
   EXPECT_NEAR(m.average_normal_instability, 12 * 90.0 / 18, 1e-9);
 }
 
-TEST(Measures, TetrahedronVolumeAndArea) {
+TEST(Measures, TetrahedronByHand) {
+  // Three right isosceles faces on the axis planes and one equilateral face of side sqrt(2).
   Measures m = compute_measures(tetrahedron());
+  EXPECT_EQ(m.vertices, 4u);
+  EXPECT_EQ(m.triangles, 4u);
   EXPECT_EQ(m.edges, 6u);
-  EXPECT_NEAR(m.volume, 1.0 / 6, 1e-12);
-  EXPECT_NEAR(m.area, 1.5 + std::sqrt(3.0) / 2, 1e-12);
+  EXPECT_EQ(m.boundary_loops, 0u);
+  EXPECT_EQ(m.components, 1u);
   EXPECT_NEAR(m.min_angle_deg, 45.0, 1e-9);
   EXPECT_NEAR(m.max_angle_deg, 90.0, 1e-9);
+  EXPECT_NEAR(m.average_edge_length, (3 + 3 * std::sqrt(2.0)) / 6, 1e-12);
+  EXPECT_NEAR(m.area, 1.5 + std::sqrt(3.0) / 2, 1e-12);
+  EXPECT_NEAR(m.volume, 1.0 / 6, 1e-12);
+  // Axis edges join two axis planes (normals at 90 degrees); the other three join an axis
+  // plane (outward normal -e_i) and the slanted face (normal (1,1,1)/sqrt 3): acos(-1/sqrt 3).
+  double slanted = std::acos(-1 / std::sqrt(3.0)) * 180 / std::numbers::pi;
+  EXPECT_NEAR(m.average_normal_instability, (3 * 90 + 3 * slanted) / 6, 1e-9);
+  EXPECT_TRUE(m.is_manifold);
+  EXPECT_TRUE(m.is_oriented);
+  EXPECT_TRUE(m.is_orientable);
   EXPECT_TRUE(m.is_watertight);
 }
 
-TEST(Measures, OpenSquareHasOneBoundaryLoop) {
+TEST(Measures, InvertedTetrahedronHasNegativeVolume) {
+  Mesh t = tetrahedron();
+  for (auto& tri : t.triangles) std::swap(tri[1], tri[2]);
+  Measures m = compute_measures(t);
+  EXPECT_NEAR(m.volume, -1.0 / 6, 1e-12);
+  EXPECT_TRUE(m.is_oriented);  // consistently inward is still consistent
+}
+
+TEST(Measures, OpenSquareByHand) {
   Measures m = compute_measures(open_square());
+  EXPECT_EQ(m.vertices, 4u);
+  EXPECT_EQ(m.triangles, 2u);
   EXPECT_EQ(m.edges, 5u);
   EXPECT_EQ(m.boundary_edges, 4u);
   EXPECT_EQ(m.boundary_loops, 1u);
-  EXPECT_TRUE(m.is_manifold);
-  EXPECT_FALSE(m.is_watertight);
+  EXPECT_EQ(m.components, 1u);
+  EXPECT_DOUBLE_EQ(m.min_angle_deg, 45.0);
+  EXPECT_DOUBLE_EQ(m.max_angle_deg, 90.0);
+  EXPECT_NEAR(m.average_edge_length, (4 + std::sqrt(2.0)) / 5, 1e-12);
   EXPECT_DOUBLE_EQ(m.area, 1.0);
-  EXPECT_DOUBLE_EQ(m.average_normal_instability, 0.0);
+  EXPECT_DOUBLE_EQ(m.volume, 0.0);                      // every point in z = 0
+  EXPECT_DOUBLE_EQ(m.average_normal_instability, 0.0);  // the diagonal joins coplanar faces
+  EXPECT_TRUE(m.is_manifold);
+  EXPECT_TRUE(m.is_oriented);
+  EXPECT_TRUE(m.is_orientable);
+  EXPECT_FALSE(m.is_watertight);
 }
 
 TEST(Measures, MoebiusStripIsNotOrientable) {
+  // 12 quads: 12 rungs, 24 rail edges (the boundary), 12 diagonals; V - E + F = 0.
   Measures m = compute_measures(moebius());
+  EXPECT_EQ(m.vertices, 24u);
+  EXPECT_EQ(m.triangles, 24u);
+  EXPECT_EQ(m.edges, 48u);
+  EXPECT_EQ(m.boundary_edges, 24u);
   EXPECT_EQ(m.components, 1u);
   EXPECT_EQ(m.boundary_loops, 1u);  // the strip's single edge
   EXPECT_TRUE(m.is_manifold);
   EXPECT_FALSE(m.is_orientable);
   EXPECT_FALSE(m.is_oriented);
+  EXPECT_FALSE(m.is_watertight);
 }
 
 TEST(Measures, TwoCubesSharingAnEdgeAreNotManifold) {
   Measures m = compute_measures(two_cubes_sharing_an_edge());
   EXPECT_EQ(m.vertices, 14u);
+  EXPECT_EQ(m.triangles, 24u);
+  EXPECT_EQ(m.edges, 35u);  // 18 + 18, one shared
   EXPECT_EQ(m.components, 1u);
-  EXPECT_EQ(m.non_manifold_edges, 1u);
-  EXPECT_FALSE(m.is_manifold);
-  EXPECT_FALSE(m.is_watertight);
   EXPECT_EQ(m.boundary_loops, 0u);
+  EXPECT_EQ(m.non_manifold_edges, 1u);     // four triangles on it
+  EXPECT_EQ(m.non_manifold_vertices, 2u);  // its two ends
+  EXPECT_DOUBLE_EQ(m.min_angle_deg, 45.0);
+  EXPECT_DOUBLE_EQ(m.max_angle_deg, 90.0);
+  EXPECT_NEAR(m.average_edge_length, (23 + 12 * std::sqrt(2.0)) / 35, 1e-12);
+  EXPECT_DOUBLE_EQ(m.area, 12.0);
   EXPECT_DOUBLE_EQ(m.volume, 2.0);
+  // Two-triangle edges only: 11 cube edges (90 degrees) and 6 diagonals (0) per cube.
+  EXPECT_NEAR(m.average_normal_instability, 22 * 90.0 / 34, 1e-9);
+  EXPECT_FALSE(m.is_manifold);
+  EXPECT_TRUE(m.is_oriented);
+  EXPECT_TRUE(m.is_orientable);
+  EXPECT_FALSE(m.is_watertight);
 }
 
 TEST(Measures, BowTieVertexIsNotManifold) {
