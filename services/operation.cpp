@@ -1,6 +1,7 @@
 #include "services/operation.h"
 
 #include <charconv>
+#include <cstdio>
 #include <cmath>
 #include <nlohmann/json.hpp>
 
@@ -14,6 +15,16 @@ namespace meshflow::services {
 namespace {
 
 const char* kDistanceUnit = "% of diagonal";
+// Naturals travel as doubles: beyond 2^53 they would not be exact.
+constexpr double kMaxExactNatural = 9007199254740992.0;
+constexpr double kMaxVertexId = 4294967295.0;  // 32-bit vertex ids
+
+// A bound as written in a message: "1", "100", "9007199254740992".
+std::string number_text(double value) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.17g", value);
+  return buffer;
+}
 
 std::vector<OperationSpec> build_specs() {
   std::vector<OperationSpec> specs = {
@@ -25,7 +36,7 @@ std::vector<OperationSpec> build_specs() {
       {"AddNoise", OperationKind::Atomic, mesh::ValueType::Real,
        {{"maxDistance", ParamType::Real, 0.1, 0.0, 100.0, true, kDistanceUnit,
          "Largest displacement along the normal"},
-        {"seed", ParamType::Natural, 0, 0.0, std::nullopt, false, "", "Random seed (same seed, same noise)"}},
+        {"seed", ParamType::Natural, 0, 0.0, kMaxExactNatural, false, "", "Random seed (same seed, same noise)"}},
        "Moves each vertex along its normal by a uniform random distance up to maxDistance."},
       {"LaplacianSmoothing", OperationKind::Atomic, mesh::ValueType::Real,
        {{"iterations", ParamType::Natural, 1, 1.0, 10000.0, false, "", "Number of smoothing steps"}},
@@ -38,7 +49,7 @@ std::vector<OperationSpec> build_specs() {
       {"Simplify", OperationKind::Atomic, mesh::ValueType::Real,
        {{"maxError", ParamType::Real, 0.1, 0.0, 100.0, true, kDistanceUnit,
          "Stop where the RMS distance of a new vertex to its planes would exceed this"},
-        {"targetVertices", ParamType::Natural, 0, 0.0, std::nullopt, false, "vertices",
+        {"targetVertices", ParamType::Natural, 0, 0.0, kMaxVertexId, false, "vertices",
          "Stop at this many vertices instead (0: use maxError)"}},
        "Quadric edge collapse with optimal placement and an adaptive error stop."},
   };
@@ -101,8 +112,8 @@ double parse_value(const OperationSpec& op, const ParamSpec& p, const std::strin
   if ((p.type == ParamType::Natural || p.type == ParamType::Integer) && value != std::floor(value))
     return fail(std::string("expected a whole number"));
   if (p.min && (p.min_exclusive ? value <= *p.min : value < *p.min))
-    return fail("must be " + std::string(p.min_exclusive ? "> " : ">= ") + std::to_string(*p.min));
-  if (p.max && value > *p.max) return fail("must be <= " + std::to_string(*p.max));
+    return fail("must be " + std::string(p.min_exclusive ? "> " : ">= ") + number_text(*p.min));
+  if (p.max && value > *p.max) return fail("must be <= " + number_text(*p.max));
   return value;
 }
 

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <numeric>
 #include <random>
-#include <set>
+#include <map>
 
 #include "mesh/errors.h"
 #include "services/cgal_bridge.h"
@@ -15,6 +15,8 @@ namespace {
 using mesh::Index;
 using mesh::Point;
 using protocol::EditMesh;
+
+std::uint64_t edge_key(Index a, Index b) { return static_cast<std::uint64_t>(std::min(a, b)) << 32 | std::max(a, b); }
 
 // Live triangles of the mesh as (id, triangle) pairs.
 std::vector<std::pair<Index, mesh::Triangle>> live_triangles(const EditMesh& m) {
@@ -31,7 +33,7 @@ std::vector<std::pair<std::uint64_t, std::uint32_t>> edge_uses(const EditMesh& m
     for (int k = 0; k < 3; ++k) {
       Index a = t[k], b = t[(k + 1) % 3];
       if (a == b) continue;
-      keys.push_back(static_cast<std::uint64_t>(std::min(a, b)) << 32 | std::max(a, b));
+      keys.push_back(edge_key(a, b));
     }
   std::sort(keys.begin(), keys.end());
   std::vector<std::pair<std::uint64_t, std::uint32_t>> out;
@@ -48,6 +50,47 @@ double length2(const Point& a, const Point& b) {
   double s = 0;
   for (int k = 0; k < 3; ++k) s += (double(a[k]) - b[k]) * (double(a[k]) - b[k]);
   return s;
+}
+
+// Duplicates: triangles with the same vertex set. Each group keeps its first triangle, unless
+// keeping none opens fewer boundary edges than keeping one: a triangle doubled back on itself
+// (a, b, c) + (a, c, b) hanging from one edge, or copies stacked with nothing else around,
+// enclose nothing, and one copy alone would show open edges that the stack hid.
+bool remove_duplicate_triangles(EditMesh& m) {
+  std::map<std::array<Index, 3>, std::vector<Index>> groups;
+  for (auto& [id, t] : live_triangles(m)) {
+    std::array<Index, 3> key = t;
+    std::sort(key.begin(), key.end());
+    groups[key].push_back(id);
+  }
+  std::map<std::uint64_t, std::uint32_t> uses;  // of the edges of duplicated triangles only
+  for (auto& [key, ids] : groups)
+    if (ids.size() > 1)
+      for (int k = 0; k < 3; ++k) uses[edge_key(key[k], key[(k + 1) % 3])] = 0;
+  for (auto& [id, t] : live_triangles(m))
+    for (int k = 0; k < 3; ++k)
+      if (auto it = uses.find(edge_key(t[k], t[(k + 1) % 3])); it != uses.end() && t[k] != t[(k + 1) % 3])
+        it->second++;
+  bool changed = false;
+  for (auto& [key, ids] : groups) {
+    if (ids.size() < 2) continue;
+    auto opened = [&](std::uint32_t removed) {
+      int count = 0;
+      for (int k = 0; k < 3; ++k) {
+        if (key[k] == key[(k + 1) % 3]) continue;
+        std::uint32_t before = uses[edge_key(key[k], key[(k + 1) % 3])];
+        count += before != 1 && before - removed == 1;
+      }
+      return count;
+    };
+    auto removed = static_cast<std::uint32_t>(ids.size() - 1);
+    if (opened(removed + 1) < opened(removed)) ++removed;
+    for (std::uint32_t i = 0; i < removed; ++i) m.remove_triangle(ids[ids.size() - 1 - i]);
+    for (int k = 0; k < 3; ++k)
+      if (key[k] != key[(k + 1) % 3]) uses[edge_key(key[k], key[(k + 1) % 3])] -= removed;
+    changed = true;
+  }
+  return changed;
 }
 
 }  // namespace
@@ -157,17 +200,7 @@ void add_noise(EditMesh& m, double max_distance, std::uint64_t seed) {
 void remove_degenerate_triangles(EditMesh& m) {
   constexpr int kMaxPasses = 20;
   for (int pass = 0; pass < kMaxPasses; ++pass) {
-    bool changed = false;
-    // Duplicates: the same vertex set; keep the first.
-    std::set<std::array<Index, 3>> seen;
-    for (auto& [id, t] : live_triangles(m)) {
-      std::array<Index, 3> key = t;
-      std::sort(key.begin(), key.end());
-      if (!seen.insert(key).second) {
-        m.remove_triangle(id);
-        changed = true;
-      }
-    }
+    bool changed = remove_duplicate_triangles(m);
     for (auto& [id, t0] : live_triangles(m)) {
       if (!m.triangle_alive(id)) continue;
       mesh::Triangle t = m.triangle(id);

@@ -2,6 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <map>
+
 #include <nlohmann/json.hpp>
 
 #include "mesh/canonical_ply.h"
@@ -11,6 +15,7 @@
 #include "protocol/correction.h"
 #include "protocol/edit_mesh.h"
 #include "services/compare.h"
+#include "tests/support/manifest.h"
 #include "tests/support/meshes.h"
 
 namespace meshflow::services {
@@ -60,10 +65,8 @@ TEST(Operations, RemoveDegenerateTrianglesLeavesNoZeroArea) {
     auto after = mesh::compute_measures(r.output);
     EXPECT_EQ(after.degenerate_triangles, 0u);
     EXPECT_GT(after.min_angle_deg, 0.0);
-    // No hole opened: zero-area triangles are edited away, not deleted. (elephant_degenerate's
-    // triplicated fin hides its open edges behind non-manifold ones until duplicates go.)
-    if (std::string(name) != "malformed/elephant_degenerate.off")
-      EXPECT_LE(after.boundary_loops, mesh::compute_measures(m).boundary_loops);
+    // No hole opened: zero-area triangles are edited away, not deleted.
+    EXPECT_LE(after.boundary_loops, mesh::compute_measures(m).boundary_loops);
   }
 }
 
@@ -75,10 +78,22 @@ TEST(Operations, LaplacianSmoothingLowersNoiseAndKeepsBoundaries) {
   EXPECT_GT(n.average_normal_instability, mesh::compute_measures(bunny).average_normal_instability);
   EXPECT_LT(s.average_normal_instability, n.average_normal_instability);
   EXPECT_EQ(s.boundary_loops, n.boundary_loops);
-  // Boundary vertices stay where they were.
-  auto boundary_vertex = bunny.triangles[0][0];
-  (void)boundary_vertex;
   EXPECT_EQ(smooth.output.positions.size(), bunny.positions.size());
+}
+
+TEST(Operations, DuplicatesDoubledBackOnAnEdgeGoTogether) {
+  // A triangle and its reverse hanging from an edge of a square: removing one copy would leave
+  // the other's two free edges open; removing both leaves the square as it was.
+  Mesh m = open_square();
+  m.positions.push_back({0.5f, 0.5f, 1});
+  m.triangles.push_back({0, 1, 4});
+  m.triangles.push_back({0, 4, 1});
+  AtomicResult r = run("RemoveDegenerateTriangles", m);
+  EXPECT_EQ(r.output.triangles, open_square().triangles);
+  // A plain duplicate inside a surface keeps one copy.
+  Mesh cube_twice = cube();
+  cube_twice.triangles.push_back(cube_twice.triangles[3]);
+  EXPECT_EQ(run("RemoveDegenerateTriangles", cube_twice).output, cube());
 }
 
 TEST(Operations, AddNoiseIsReproducibleAndBounded) {
@@ -123,6 +138,21 @@ TEST(Operations, BadParametersAreRefusedClearly) {
   EXPECT_NE(message([&] { resolve_params(find_operation("Simplify"), {{"maxError", "0"}}); }).find("must be > 0"), std::string::npos);
   EXPECT_NE(message([&] { resolve_params(ls, {{"iters", "2"}}); }).find("has no parameter 'iters'"), std::string::npos);
   EXPECT_NE(message([&] { find_operation("Smooth"); }).find("unknown operation 'Smooth' (known: "), std::string::npos);
+  const OperationSpec& simplify = find_operation("Simplify");
+  const OperationSpec& noise = find_operation("AddNoise");
+  EXPECT_NE(message([&] { resolve_params(ls, {{"iterations", "0"}}); }).find("iterations=0: must be >= 1"), std::string::npos);
+  EXPECT_NE(message([&] { resolve_params(ls, {{"iterations", "abc"}}); }).find("expected a natural number"), std::string::npos);
+  EXPECT_NE(message([&] { resolve_params(ls, {{"iterations", ""}}); }).find("expected a natural number"), std::string::npos);
+  EXPECT_NE(message([&] { resolve_params(simplify, {{"maxError", "-0.5"}}); }).find("maxError=-0.5: must be > 0"), std::string::npos);
+  EXPECT_NE(message([&] { resolve_params(simplify, {{"targetVertices", "-3"}}); }).find("must be >= 0"), std::string::npos);
+  EXPECT_NE(message([&] { resolve_params(simplify, {{"targetVertices", "1e12"}}); }).find("must be <= 4294967295"), std::string::npos);
+  EXPECT_NE(message([&] { resolve_params(noise, {{"maxDistance", "nan"}}); }).find("expected a real number"), std::string::npos);
+  EXPECT_NE(message([&] { resolve_params(noise, {{"maxDistance", "inf"}}); }).find("expected a real number"), std::string::npos);
+  EXPECT_NE(message([&] { resolve_params(noise, {{"maxDistance", "0"}}); }).find("must be > 0"), std::string::npos);
+  EXPECT_NE(message([&] { resolve_params(noise, {{"seed", "-1"}}); }).find("seed=-1: must be >= 0"), std::string::npos);
+  EXPECT_NE(message([&] { resolve_params(noise, {{"seed", "1e300"}}); }).find("must be <= 9007199254740992"), std::string::npos);
+  EXPECT_NE(message([&] { resolve_params(find_operation("FillHoles"), {{"iterations", "1"}}); }).find("it takes none"), std::string::npos);
+  EXPECT_NE(message([&] { run_atomic(ls, cube(), {{"iterations", -2}}); }).find("iterations must be at least 1"), std::string::npos);
   EXPECT_THROW(run_analysis(ls, cube()), InvalidInput);
 }
 
@@ -137,22 +167,22 @@ TEST(Operations, EveryMeasureIsAnAnalysisOperation) {
   EXPECT_EQ(json.size(), 7u + 15u);
 }
 
-// Every atomic operation on every valid shared mesh: the correction reproduces the output
-// bit for bit.
-TEST(Operations, CorrectionsReproduceEveryOutputOnEveryMesh) {
-  const char* meshes[] = {"real/stanford-bunny.obj", "real/kitten.off", "real/ogre.obj", "real/spot_vt_vn.obj",
-                          "real/beast_quads.obj", "real/dragon_100k.ply", "real/igea_tristrips.ply",
-                          "defects/b9_mesh.off", "defects/blobby-shuffled.off", "defects/boeing.off",
-                          "defects/degtri_sliding.off", "defects/dragon_38k_holes.ply",
-                          "defects/elephant-with-holes.off", "defects/fold.off", "defects/holes.off",
-                          "defects/mech-holes-shark.off", "defects/standingblob_mixed_polys.ply",
-                          "defects/tank_many_components.ply", "defects/tetra_intersected_by_triangle.off",
-                          "defects/triangular_hole.off", "formats/3DSMaxExport.STL", "formats/Spider_ascii.stl",
-                          "formats/cube_binary.ply", "formats/fandisk_quads.off", "formats/icosahedron_ascii.stl",
-                          "formats/triangle_with_two_solids.stl", "large/terrain_fuji_512.ply",
-                          "malformed/elephant_degenerate.off", "malformed/elephant_flipped.off",
-                          "malformed/elephant_nonmanifold.off", "malformed/elephant_poly.ply"};
-  std::vector<std::pair<std::string, std::map<std::string, std::string>>> ops = {
+// Vertices on an edge used by exactly one triangle.
+std::vector<bool> boundary_vertices(const Mesh& m) {
+  std::map<std::pair<mesh::Index, mesh::Index>, int> uses;
+  for (const auto& t : m.triangles)
+    for (int k = 0; k < 3; ++k)
+      if (t[k] != t[(k + 1) % 3]) uses[std::minmax(t[k], t[(k + 1) % 3])]++;
+  std::vector<bool> out(m.positions.size(), false);
+  for (const auto& [edge, n] : uses)
+    if (n == 1) out[edge.first] = out[edge.second] = true;
+  return out;
+}
+
+// Every atomic operation on every valid mesh of the shared corpus: its effect, checked by the
+// measures, and its correction, which must reproduce the output bit for bit.
+TEST(Operations, EveryOperationOnEveryMeshHasItsEffectAndItsCorrection) {
+  const std::vector<std::pair<std::string, std::map<std::string, std::string>>> ops = {
       {"RemoveSmallestComponents", {}},
       {"LaplacianSmoothing", {{"iterations", "2"}}},
       {"AddNoise", {{"maxDistance", "0.3"}, {"seed", "5"}}},
@@ -161,13 +191,50 @@ TEST(Operations, CorrectionsReproduceEveryOutputOnEveryMesh) {
       {"FillHoles", {}},
       {"Simplify", {{"maxError", "0.2"}}},
   };
-  for (const char* name : meshes) {
+  auto meshes = valid_shared_meshes();
+  ASSERT_GE(meshes.size(), 39u);
+  for (const std::string& name : meshes) {
     Mesh input = shared(name);
+    auto before = mesh::compute_measures(input);
+    std::vector<bool> on_boundary = boundary_vertices(input);
     for (const auto& [op, params] : ops) {
       // Filling the outer border of a 500k-triangle terrain is a different job; skip it there.
       if (op == "FillHoles" && input.triangles.size() > 200000) continue;
-      SCOPED_TRACE(std::string(name) + " " + op);
+      SCOPED_TRACE(name + " " + op);
       AtomicResult r = run(op, input, params);
+      auto after = mesh::compute_measures(r.output);
+      if (op == "RemoveSmallestComponents") {
+        EXPECT_EQ(after.components, std::min<std::uint64_t>(before.components, 1));
+        EXPECT_EQ(after.unreferenced_vertices, 0u);
+        EXPECT_LE(after.boundary_loops, before.boundary_loops);
+      } else if (op == "LaplacianSmoothing") {
+        ASSERT_EQ(r.output.positions.size(), input.positions.size());
+        EXPECT_EQ(r.output.triangles, input.triangles);
+        std::size_t moved_on_boundary = 0;
+        for (std::size_t v = 0; v < input.positions.size(); ++v)
+          moved_on_boundary += on_boundary[v] && r.output.positions[v] != input.positions[v];
+        EXPECT_EQ(moved_on_boundary, 0u);
+      } else if (op == "AddNoise") {
+        ASSERT_EQ(r.output.positions.size(), input.positions.size());
+        EXPECT_EQ(r.output.triangles, input.triangles);
+        double limit = 0.003 * mesh::bounding_box(input).diagonal() * 1.0001;
+        double largest = 0;
+        for (std::size_t v = 0; v < input.positions.size(); ++v) {
+          double d = 0;
+          for (int k = 0; k < 3; ++k) d += std::pow(double(r.output.positions[v][k]) - input.positions[v][k], 2);
+          largest = std::max(largest, std::sqrt(d));
+        }
+        EXPECT_LE(largest, limit);
+      } else if (op == "RemoveDegenerateTriangles") {
+        EXPECT_EQ(after.degenerate_triangles, 0u);
+        EXPECT_LE(after.boundary_loops, before.boundary_loops);  // zero-area triangles are edited away, not deleted
+      } else if (op == "FillHolesHeightField") {
+        EXPECT_EQ(after.boundary_loops, std::min<std::uint64_t>(before.boundary_loops, 1));
+      } else if (op == "FillHoles") {
+        EXPECT_EQ(after.boundary_loops, 0u);
+      } else if (op == "Simplify") {
+        EXPECT_LE(after.vertices, before.vertices);
+      }
       auto bytes = protocol::encode_correction(input, mesh::mesh_sha256(input), mesh::mesh_sha256(r.output), r.edits);
       EXPECT_EQ(mesh::mesh_sha256(protocol::apply_correction(input, bytes)), mesh::mesh_sha256(r.output));
     }
