@@ -46,13 +46,17 @@ def find(pattern, cast=float):
 print()
 print("| answer | meshflow | MeshLab |")
 print("|---|---:|---:|")
-print(f"| vertices | {mf['NumberOfVertices']} | {find(r'V: (\d+)', int)} |")
-print(f"| edges | {mf['NumberOfEdges']} | {find(r'E: (\d+)', int)} |")
-print(f"| triangles | {t} | {find(r'F:(\d+)', int)} |")
-print(f"| components | {mf['NumberOfComponents']} | {find(r'composed by (\d+) connected', int)} |")
-print(f"| boundary loops | {mf['NumberOfBoundaryLoops']} | {find(r'Mesh has (\d+) holes', int)} |")
-print(f"| manifold | {mf['IsManifold']} | {'two-manifold' in log} |")
-print(f"| surface area | {mf['SurfaceArea']:.6f} | {find(r'Surface Area is (\S+)')} |")
-print(f"| average edge length | {mf['AverageEdgeLength']:.6f} | {find(r'Avg Len (\S+)')} |")
+rows = [
+    ("vertices", mf["NumberOfVertices"], find(r"V: (\d+)", int)),
+    ("edges", mf["NumberOfEdges"], find(r"E: (\d+)", int)),
+    ("triangles", t, find(r"F:(\d+)", int)),
+    ("components", mf["NumberOfComponents"], find(r"composed by (\d+) connected", int)),
+    ("boundary loops", mf["NumberOfBoundaryLoops"], find(r"Mesh has (\d+) holes", int)),
+    ("manifold", mf["IsManifold"], "two-manifold" in log),
+    ("surface area", f"{mf['SurfaceArea']:.6f}", find(r"Surface Area is (\S+)")),
+    ("average edge length", f"{mf['AverageEdgeLength']:.6f}", find(r"Avg Len (\S+)")),
+]
+for label, ours, theirs in rows:
+    print(f"| {label} | {ours} | {theirs} |")
 print("(MeshLab sums the area in float32: at this size its total drifts in the third digit.)")
 PY
