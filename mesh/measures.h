@@ -25,7 +25,11 @@ struct Measures {
   double average_edge_length = 0;       // AverageEdgeLength
   double area = 0;                      // SurfaceArea
   double volume = 0;                    // Volume
-  double average_normal_instability = 0;  // AverageNormalInstability
+  // AverageNormalInstability: over the E2 edges used by exactly two triangles t1, t2 (both of
+  // non-zero area), (1/E2) * sum acos(n1 . n2) in degrees, n1 and n2 their unit normals with
+  // n2 flipped when the two traverse the edge the same way (so a consistent orientation is
+  // compared): 0 on a plane, rising with noise, falling with smoothing.
+  double average_normal_instability = 0;
   bool is_manifold = true;              // IsManifold (edge- and vertex-manifold)
   bool is_oriented = true;              // IsOriented
   bool is_orientable = true;            // IsOrientable
@@ -40,7 +44,10 @@ struct Measures {
   std::uint64_t unreferenced_vertices = 0;
 };
 
-// Every measure in one pass over the mesh. Memory: about 24 bytes per triangle beyond the mesh.
+// Every measure in one pass over the mesh. Memory beyond the mesh: a vertex->triangle
+// incidence (4 B per corner + 8 B per vertex) and three union-finds, about 30 bytes per
+// triangle on a closed mesh (V = T/2); `meshflow stats` peaks at 48 B/triangle with the mesh.
+// Areas, volume and lengths are summed in double.
 Measures compute_measures(const Mesh& mesh);
 
 // Name of each analysis operation and its value as JSON text, in DESIGN §5's order; the

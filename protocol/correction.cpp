@@ -15,11 +15,53 @@ namespace meshflow::protocol {
 namespace {
 
 constexpr char kMagic[4] = {'M', 'F', 'C', '1'};
-constexpr std::uint8_t kVersion = 1;
+constexpr std::uint8_t kVersion = 2;  // 2: AddTriangle corners and AddVertex positions predicted
 constexpr std::size_t kHeaderSize = 4 + 1 + 32 + 32 + 8 + 4;
 constexpr std::uint64_t kMaxPayload = 1ull << 34;  // 16 GiB: anything bigger is not ours
 constexpr std::uint8_t kHasPoint = 0x80;
-enum Stream { kOps, kIds, kPositions, kDeltas, kFlags, kStreams };
+enum Stream { kOps, kIds, kPositions, kDeltas, kFlags, kCorners, kStreams };
+
+// The corners of added triangles (a hole's patch, a region re-triangulated) mostly repeat a
+// vertex of the last few triangles or introduce the next vertex added: one byte says which,
+// and only the other corners are written as ids. Encoder and decoder keep the same state.
+constexpr std::uint8_t kCornerCacheSize = 16;
+constexpr std::uint8_t kCornerExplicit = kCornerCacheSize;  // an id follows in the id stream
+constexpr std::uint8_t kCornerFresh = kCornerCacheSize + 1;  // the next added vertex, first use
+class CornerModel {
+ public:
+  explicit CornerModel(Index first_added) : fresh_(first_added) {}
+  // The code for corner v, and the state updated as if it had been coded.
+  std::uint8_t code(Index v) {
+    std::uint8_t c = kCornerExplicit;
+    if (v == fresh_) c = kCornerFresh;
+    else
+      for (std::uint8_t i = 0; i < cache_size_; ++i)
+        if (cache_[i] == v) c = i;
+    see(v, c);
+    return c;
+  }
+  // The corner a code stands for (explicit: `explicit_id`), state updated. False: a bad code.
+  bool corner(std::uint8_t c, Index explicit_id, Index& v) {
+    if (c == kCornerFresh) v = fresh_;
+    else if (c == kCornerExplicit) v = explicit_id;
+    else if (c < cache_size_) v = cache_[c];
+    else return false;
+    see(v, c);
+    return true;
+  }
+
+ private:
+  void see(Index v, std::uint8_t c) {
+    if (c == kCornerFresh) ++fresh_;
+    std::uint8_t at = c < cache_size_ ? c : std::min<std::uint8_t>(cache_size_, kCornerCacheSize - 1);
+    if (c >= cache_size_ && cache_size_ < kCornerCacheSize) ++cache_size_;
+    for (std::uint8_t i = at; i > 0; --i) cache_[i] = cache_[i - 1];  // move to front
+    cache_[0] = v;
+  }
+  Index fresh_;
+  std::array<Index, kCornerCacheSize> cache_{};
+  std::uint8_t cache_size_ = 0;
+};
 
 // ---- encoding helpers ----
 // The umbrella prediction of every live vertex: the average of its edge neighbours (ascending
@@ -70,9 +112,10 @@ struct Streams {
     if (on) flags.back() |= static_cast<std::uint8_t>(1u << (flag_bits % 8));
     ++flag_bits;
   }
-  std::vector<std::uint8_t> ops, ids;
+  std::vector<std::uint8_t> ops, ids, corners;
   std::vector<std::uint32_t> positions, deltas;
   Index previous_id = 0;
+  Point previous_added{0, 0, 0};  // AddVertex positions are coded against the previous one
 
   void id(Index value) {
     auto delta = static_cast<std::int64_t>(value) - static_cast<std::int64_t>(previous_id);
@@ -150,8 +193,8 @@ class Reader {
  public:
   Reader(std::span<const std::uint8_t> ops, std::span<const std::uint8_t> ids,
          std::span<const std::uint8_t> positions, std::span<const std::uint8_t> deltas,
-         std::span<const std::uint8_t> flags)
-      : ops_(ops), ids_(ids), positions_(positions), deltas_(deltas), flags_(flags) {
+         std::span<const std::uint8_t> flags, std::span<const std::uint8_t> corners)
+      : ops_(ops), ids_(ids), positions_(positions), deltas_(deltas), flags_(flags), corners_(corners) {
     if (positions.size() % 12 || deltas.size() % 12)
       throw InvalidInput("correction: position streams are not whole float triples");
   }
@@ -195,6 +238,10 @@ class Reader {
     }
     return p;
   }
+  std::uint8_t corner_code() {
+    if (corner_at_ >= corners_.size()) throw InvalidInput("correction: truncated corner stream");
+    return corners_[corner_at_++];
+  }
   bool flag() {
     if (flag_at_ / 8 >= flags_.size()) throw InvalidInput("correction: truncated flag stream");
     bool on = (flags_[flag_at_ / 8] >> (flag_at_ % 8)) & 1;
@@ -203,7 +250,8 @@ class Reader {
   }
   bool finished() const {
     return op_at_ == ops_.size() && id_at_ == ids_.size() && pos_at_ * 4 == positions_.size() &&
-           delta_at_ * 4 == deltas_.size() && (flag_at_ + 7) / 8 == flags_.size();
+           delta_at_ * 4 == deltas_.size() && (flag_at_ + 7) / 8 == flags_.size() &&
+           corner_at_ == corners_.size();
   }
 
  private:
@@ -211,8 +259,8 @@ class Reader {
     return planes[i] | planes[n + i] << 8 | planes[2 * n + i] << 16 |
            static_cast<std::uint32_t>(planes[3 * n + i]) << 24;
   }
-  std::span<const std::uint8_t> ops_, ids_, positions_, deltas_, flags_;
-  std::size_t op_at_ = 0, id_at_ = 0, pos_at_ = 0, delta_at_ = 0, flag_at_ = 0;
+  std::span<const std::uint8_t> ops_, ids_, positions_, deltas_, flags_, corners_;
+  std::size_t op_at_ = 0, id_at_ = 0, pos_at_ = 0, delta_at_ = 0, flag_at_ = 0, corner_at_ = 0;
   Index previous_id_ = 0;
 };
 
@@ -258,7 +306,16 @@ Parsed parse(std::span<const std::uint8_t> bytes) {
 // Decodes edit after edit, applying each to `mesh` (moves are relative to current positions).
 void decode_into(const Parsed& parsed, EditMesh& mesh, EditList* edits) {
   Reader in(parsed.streams[kOps], parsed.streams[kIds], parsed.streams[kPositions], parsed.streams[kDeltas],
-            parsed.streams[kFlags]);
+            parsed.streams[kFlags], parsed.streams[kCorners]);
+  CornerModel corners(static_cast<Index>(mesh.vertex_slots()));
+  Point previous_added{0, 0, 0};
+  auto corner = [&]() {
+    std::uint8_t c = in.corner_code();
+    Index explicit_id = c == kCornerExplicit ? in.id() : 0;
+    Index v = 0;
+    if (!corners.corner(c, explicit_id, v)) throw InvalidInput("correction: bad corner code " + std::to_string(c));
+    return v;
+  };
   for (std::uint32_t i = 0; i < parsed.header.edit_count; ++i) {
     std::uint8_t code = in.op();
     bool has_point = code & kHasPoint;
@@ -269,10 +326,10 @@ void decode_into(const Parsed& parsed, EditMesh& mesh, EditList* edits) {
       return std::nullopt;
     };
     switch (code) {
-      case 0: { Index a = in.id(), b = in.id(), c = in.id(); edit = AddTriangle{a, b, c}; break; }
+      case 0: { Index a = corner(), b = corner(), c = corner(); edit = AddTriangle{a, b, c}; break; }
       case 1: edit = RemoveTriangle{in.id()}; break;
       case 2: { Index t = in.id(); edit = SplitTriangle{t, optional_point()}; break; }
-      case 3: edit = AddVertex{in.point()}; break;
+      case 3: previous_added = in.moved(previous_added); edit = AddVertex{previous_added}; break;
       case 4: edit = RemoveVertex{in.id()}; break;
       case 5: {
         Index v = in.id();
@@ -314,16 +371,26 @@ std::vector<std::uint8_t> encode_correction(const mesh::Mesh& base, const std::s
                                             const std::string& result_sha256, const EditList& edits) {
   Streams s;
   EditMesh mesh(base);
+  CornerModel corners(static_cast<Index>(base.positions.size()));
   for (std::size_t i = 0; i < edits.size(); ++i) {
     const Edit& edit = edits[i];
     std::uint8_t code = opcode(edit);
     std::visit(
         [&](const auto& e) {
           using E = std::decay_t<decltype(e)>;
-          if constexpr (std::is_same_v<E, AddTriangle>) { s.id(e.a); s.id(e.b); s.id(e.c); }
+          if constexpr (std::is_same_v<E, AddTriangle>) {
+            for (Index v : {e.a, e.b, e.c}) {
+              std::uint8_t c = corners.code(v);
+              s.corners.push_back(c);
+              if (c == kCornerExplicit) s.id(v);
+            }
+          }
           else if constexpr (std::is_same_v<E, RemoveTriangle>) s.id(e.t);
           else if constexpr (std::is_same_v<E, SplitTriangle>) { s.id(e.t); if (e.p) code |= kHasPoint, s.point(*e.p); }
-          else if constexpr (std::is_same_v<E, AddVertex>) s.point(e.p);
+          else if constexpr (std::is_same_v<E, AddVertex>) {
+            s.move(s.previous_added, e.p);
+            s.previous_added = e.p;
+          }
           else if constexpr (std::is_same_v<E, RemoveVertex>) s.id(e.v);
           else if constexpr (std::is_same_v<E, MoveVertex>) {
             if (!mesh.vertex_alive(e.v)) throw InvalidInput("edit " + std::to_string(i) + ": MoveVertex of a dead vertex");
@@ -354,7 +421,7 @@ std::vector<std::uint8_t> encode_correction(const mesh::Mesh& base, const std::s
   std::vector<std::uint8_t> positions, deltas;
   append_planes(positions, s.positions);
   append_planes(deltas, s.deltas);
-  const std::vector<std::uint8_t>* streams[kStreams] = {&s.ops, &s.ids, &positions, &deltas, &s.flags};
+  const std::vector<std::uint8_t>* streams[kStreams] = {&s.ops, &s.ids, &positions, &deltas, &s.flags, &s.corners};
   for (auto* stream : streams) put_u64(payload, stream->size());
   for (auto* stream : streams) payload.insert(payload.end(), stream->begin(), stream->end());
 

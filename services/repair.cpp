@@ -93,6 +93,46 @@ bool remove_duplicate_triangles(EditMesh& m) {
   return changed;
 }
 
+// Triangles in depth-first order over shared edges: each next triangle is an unvisited
+// neighbour of the most recent triangle that still has one (a new component starts at the
+// lowest unvisited id).
+std::vector<std::size_t> patch_order(const std::vector<mesh::Triangle>& triangles) {
+  std::vector<std::pair<std::uint64_t, std::size_t>> by_edge;
+  for (std::size_t t = 0; t < triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) by_edge.emplace_back(edge_key(triangles[t][k], triangles[t][(k + 1) % 3]), t);
+  std::sort(by_edge.begin(), by_edge.end());
+  std::vector<std::size_t> order;
+  std::vector<bool> visited(triangles.size(), false);
+  std::vector<std::size_t> stack;
+  for (std::size_t start = 0; start < triangles.size(); ++start) {
+    if (visited[start]) continue;
+    stack.push_back(start);
+    visited[start] = true;
+    order.push_back(start);
+    while (!stack.empty()) {
+      std::size_t t = stack.back();
+      std::size_t next = triangles.size();
+      for (int k = 0; k < 3 && next == triangles.size(); ++k) {
+        auto key = edge_key(triangles[t][k], triangles[t][(k + 1) % 3]);
+        auto it = std::lower_bound(by_edge.begin(), by_edge.end(), std::make_pair(key, std::size_t{0}));
+        for (; it != by_edge.end() && it->first == key; ++it)
+          if (!visited[it->second]) {
+            next = it->second;
+            break;
+          }
+      }
+      if (next == triangles.size()) {
+        stack.pop_back();
+        continue;
+      }
+      visited[next] = true;
+      order.push_back(next);
+      stack.push_back(next);
+    }
+  }
+  return order;
+}
+
 }  // namespace
 
 void remove_smallest_components(EditMesh& m) {
@@ -278,12 +318,27 @@ void fill_holes(EditMesh& m, bool keep_largest_loop) {
   for (std::size_t v = 0; v < m.vertex_slots(); ++v)
     if (m.vertex_alive(static_cast<Index>(v))) slot_of.push_back(static_cast<Index>(v));
   cgal::HoleFill fill = cgal::fill_holes(current, keep_largest_loop);
-  std::vector<Index> new_slot;
-  for (const Point& p : fill.vertices) new_slot.push_back(m.add_vertex(p));
-  for (const auto& t : fill.triangles) {
+  const auto first_new = static_cast<Index>(current.positions.size());
+  // The patches as a correction codes them best (protocol/correction.h): triangles in
+  // depth-first order across shared edges, so that each repeats corners of the last few, and
+  // new vertices added in the order the triangles first use them.
+  std::vector<std::size_t> order = patch_order(fill.triangles);
+  std::vector<Index> new_slot(fill.vertices.size(), 0);
+  std::vector<bool> added(fill.vertices.size(), false);
+  for (std::size_t t : order)
+    for (Index v : fill.triangles[t])
+      if (v >= first_new && !added[v - first_new]) {
+        added[v - first_new] = true;
+        new_slot[v - first_new] = m.add_vertex(fill.vertices[v - first_new]);
+      }
+  for (std::size_t k = 0; k < fill.vertices.size(); ++k)
+    if (!added[k]) new_slot[k] = m.add_vertex(fill.vertices[k]);  // none expected: every new vertex is used
+  for (std::size_t t : order) {
     mesh::Triangle s;
-    for (int k = 0; k < 3; ++k)
-      s[k] = t[k] < current.positions.size() ? slot_of[t[k]] : new_slot[t[k] - current.positions.size()];
+    for (int k = 0; k < 3; ++k) {
+      Index v = fill.triangles[t][k];
+      s[k] = v < first_new ? slot_of[v] : new_slot[v - first_new];
+    }
     m.add_triangle(s[0], s[1], s[2]);
   }
 }
