@@ -57,23 +57,33 @@ double length2(const Point& a, const Point& b) {
 // (a, b, c) + (a, c, b) hanging from one edge, or copies stacked with nothing else around,
 // enclose nothing, and one copy alone would show open edges that the stack hid.
 bool remove_duplicate_triangles(EditMesh& m) {
-  std::map<std::array<Index, 3>, std::vector<Index>> groups;
+  std::vector<std::pair<std::array<Index, 3>, Index>> sorted;  // (vertex set, triangle id)
   for (auto& [id, t] : live_triangles(m)) {
     std::array<Index, 3> key = t;
     std::sort(key.begin(), key.end());
-    groups[key].push_back(id);
+    sorted.emplace_back(key, id);
   }
+  std::sort(sorted.begin(), sorted.end());
+  std::vector<std::pair<std::array<Index, 3>, std::vector<Index>>> groups;  // duplicated sets only
+  for (std::size_t i = 0; i < sorted.size();) {
+    std::size_t j = i;
+    while (j < sorted.size() && sorted[j].first == sorted[i].first) ++j;
+    if (j - i > 1) {
+      groups.emplace_back(sorted[i].first, std::vector<Index>{});
+      for (std::size_t k = i; k < j; ++k) groups.back().second.push_back(sorted[k].second);
+    }
+    i = j;
+  }
+  if (groups.empty()) return false;
   std::map<std::uint64_t, std::uint32_t> uses;  // of the edges of duplicated triangles only
   for (auto& [key, ids] : groups)
-    if (ids.size() > 1)
-      for (int k = 0; k < 3; ++k) uses[edge_key(key[k], key[(k + 1) % 3])] = 0;
+    for (int k = 0; k < 3; ++k) uses[edge_key(key[k], key[(k + 1) % 3])] = 0;
   for (auto& [id, t] : live_triangles(m))
     for (int k = 0; k < 3; ++k)
       if (auto it = uses.find(edge_key(t[k], t[(k + 1) % 3])); it != uses.end() && t[k] != t[(k + 1) % 3])
         it->second++;
   bool changed = false;
   for (auto& [key, ids] : groups) {
-    if (ids.size() < 2) continue;
     auto opened = [&](std::uint32_t removed) {
       int count = 0;
       for (int k = 0; k < 3; ++k) {
@@ -312,6 +322,9 @@ void remove_degenerate_triangles(EditMesh& m) {
 }
 
 void fill_holes(EditMesh& m, bool keep_largest_loop) {
+  // A closed mesh has nothing to fill: spare it the halfedge copy.
+  auto edges = edge_uses(m);
+  if (std::none_of(edges.begin(), edges.end(), [](const auto& e) { return e.second == 1; })) return;
   mesh::Mesh current = m.compact();
   // compact() renumbers; map its ids back to the slots of the mesh under edit.
   std::vector<Index> slot_of;
