@@ -252,6 +252,65 @@ TEST(CompressedInput, TruncatedOrCorruptStreamsAreRefused) {
   EXPECT_FALSE(r.message.empty());
 }
 
+Mesh accepted(const std::string& bytes, const std::string& name, ReadInfo* info = nullptr) {
+  std::span<const std::uint8_t> span(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size());
+  return read_mesh_from_memory(span, name, info);
+}
+
+TEST(OffReader, VariantsSkipTheirExtras) {
+  const std::vector<Point> xyz = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
+  const std::vector<Triangle> tris = {{0, 1, 2}, {2, 1, 3}};
+  struct Case { const char* name; std::string text; };
+  const Case cases[] = {
+      {"plain", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n3 2 1 3\n"},
+      {"counts inline, comments", "# c\nOFF 4 2 0 # counts here\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2 # x\n3 2 1 3\n"},
+      {"COFF", "COFF\n4 2 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n0 1 0 0 0 255 255\n1 1 0 9 9 9 255\n"
+               "3 0 1 2 1 0 0\n3 2 1 3 0.5 0.5 0.5 1\n"},
+      {"NOFF", "NOFF\n4 2 0\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n1 1 0 0 0 1\n3 0 1 2\n3 2 1 3\n"},
+      {"STCNOFF", "STCNOFF\n4 2 0\n0 0 0 0 0 1 1 1 1 1 0 0\n1 0 0 0 0 1 1 1 1 1 1 0\n0 1 0 0 0 1 1 1 1 1 0 1\n"
+                  "1 1 0 0 0 1 1 1 1 1 1 1\n3 0 1 2\n3 2 1 3\n"},
+      {"4OFF", "4OFF\n4 2 0\n0 0 0 2\n2 0 0 2\n0 4 0 4\n0.5 0.5 0 0.5\n3 0 1 2\n3 2 1 3\n"},
+      {"quad", "OFF\n4 1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    ReadInfo info;
+    Mesh m = accepted(c.text, "v.off", &info);
+    if (std::string(c.name) == "quad") {
+      EXPECT_EQ(m.triangles, (std::vector<Triangle>{{0, 1, 2}, {0, 2, 3}}));  // fan from the first corner
+      EXPECT_EQ(info.polygons, 1u);
+      continue;
+    }
+    EXPECT_EQ(m.positions, xyz);
+    EXPECT_EQ(m.triangles, tris);
+  }
+}
+
+TEST(ObjReader, TokensGroupsAndRelativeIndices) {
+  std::string text =
+      "# exported\nmtllib a.mtl\no thing\ng part\ns 1\nusemtl red\n"
+      "v 0 0 0\nv 1 0 0 1.0\nv 0 1 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvn 0 0 1\n"
+      "f 1/1/1 2/2/1 3//1\nf -2/-1 -3/-2 -1\nf 1 2 4 3\nl 1 2\n";
+  ReadInfo info;
+  Mesh m = accepted(text, "t.obj", &info);
+  EXPECT_EQ(m.positions.size(), 4u);
+  EXPECT_EQ(m.triangles, (std::vector<Triangle>{{0, 1, 2}, {2, 1, 3}, {0, 1, 3}, {0, 3, 2}}));
+  EXPECT_EQ(info.faces_read, 3u);
+  EXPECT_EQ(info.polygons, 1u);
+}
+
+TEST(PlyReader, TristripsExpandWithAlternatingWindingAndRestarts) {
+  std::string text =
+      "ply\nformat ascii 1.0\nelement vertex 6\nproperty float x\nproperty float y\nproperty float z\n"
+      "element tristrips 1\nproperty list int int vertex_indices\nend_header\n"
+      "0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 2 0\n1 2 0\n"
+      "9 0 1 2 3 -1 2 3 4 5\n";
+  ReadInfo info;
+  Mesh m = accepted(text, "strip.ply", &info);
+  // Strip 0 1 2 3: (0,1,2), (2,1,3); after the restart 2 3 4 5: (2,3,4), (4,3,5).
+  EXPECT_EQ(m.triangles, (std::vector<Triangle>{{0, 1, 2}, {2, 1, 3}, {2, 3, 4}, {4, 3, 5}}));
+}
+
 TEST(Readers, EmptyAndUnrecognisedInput) {
   expect_byte("", "empty.ply", 0, "empty file: expected a PLY, OFF, OBJ or STL mesh");
   expect_byte("hello world\n", "junk.txt", 0, "unrecognised content: expected a PLY, OFF, OBJ or STL mesh");
