@@ -38,6 +38,8 @@ fuzz: deps
 	@if [ -x $(BUILD)/meshflow ]; then \
 	  $(BUILD)/meshflow op LaplacianSmoothing tests/fuzz/corpus/off/coff.off -o $(FUZZ_BUILD)/seed.ply \
 	    --correction $(FUZZ_BUILD)/tests/fuzz/corpus-work/correction/seed-ls.mfc >/dev/null 2>&1 || true; \
+	  $(BUILD)/meshflow op FillHoles ../shared/data/meshes/defects/triangular_hole.off -o $(FUZZ_BUILD)/seed.ply \
+	    --correction $(FUZZ_BUILD)/tests/fuzz/corpus-work/correction/seed-fh.mfc >/dev/null 2>&1 || true; \
 	fi
 	tests/fuzz/run.sh $(FUZZ_BUILD)/tests/fuzz $(FUZZ_SECONDS)
 
