@@ -28,12 +28,14 @@ void add_noise(protocol::EditMesh& mesh, double max_distance, std::uint64_t seed
 // Removes zero-area triangles by local edits, decided with exact predicates: a triangle with a
 // zero-length edge (repeated vertex or coincident points) collapses that edge; a collinear
 // triangle flips its longest edge into the neighbour across it (or, on the boundary, is removed:
-// its two short edges already span the same segment). Duplicate triangles (same vertex set)
-// are removed. Repeats until no zero-area triangle is left (or no edit helps).
+// its two short edges already span the same segment). Of triangles with the same vertex set,
+// one stays, or none when that opens fewer boundary edges (a triangle doubled back on itself,
+// hanging from one edge). Repeats until no zero-area triangle is left (or no edit helps).
 void remove_degenerate_triangles(protocol::EditMesh& mesh);
 
 // Fills boundary loops (Liepa: triangulate, refine, fair; CGAL), all of them or all but the one
-// with the most edges. Adds vertices and triangles.
+// with the most edges. Adds vertices and triangles: the patches' triangles in depth-first order,
+// their new vertices in the order those triangles first use them (what corrections code best).
 void fill_holes(protocol::EditMesh& mesh, bool keep_largest_loop);
 
 }  // namespace meshflow::services
