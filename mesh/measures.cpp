@@ -117,11 +117,20 @@ Measures compute_measures(const Mesh& mesh) {
     }
   }
 
-  // Per-triangle geometry: area, volume, angles, degeneracy.
+  // Per-triangle geometry: area, volume, angles, degeneracy. The three angles of a triangle
+  // share the sine term |u x v| = twice its area, so the angle at a corner is atan2(2A, u.v):
+  // corners compare by their cotangent u.v / 2A without trigonometry, and only the extreme
+  // corners get their atan2 at the end (degenerate triangles, 2A = 0, directly).
   double min_angle = 180, max_angle = 0;
+  struct Corner {
+    Vec u, v;
+    double cot = 0;
+  } smallest, largest;
+  bool has_corner = false;
   for (const Triangle& t : mesh.triangles) {
     const Point &a = mesh.positions[t[0]], &b = mesh.positions[t[1]], &c = mesh.positions[t[2]];
-    Vec n = cross(sub(b, a), sub(c, a));
+    Vec ab = sub(b, a), ac = sub(c, a), bc_edge = sub(c, b);
+    Vec n = cross(ab, ac);
     double twice_area = norm(n);
     m.area += 0.5 * twice_area;
     Vec pa{a[0], a[1], a[2]};
@@ -129,12 +138,27 @@ Measures compute_measures(const Mesh& mesh) {
     m.volume += dot(pa, bc) / 6.0;
     bool repeated = t[0] == t[1] || t[1] == t[2] || t[0] == t[2];
     if (repeated || twice_area == 0) m.degenerate_triangles++;
-    double angles[3] = {angle_deg(sub(b, a), sub(c, a)), angle_deg(sub(c, b), sub(a, b)),
-                        angle_deg(sub(a, c), sub(b, c))};
-    for (double angle : angles) {
-      min_angle = std::min(min_angle, angle);
-      max_angle = std::max(max_angle, angle);
+    // (Differences, not negations: -0.0 would turn atan2(0, 0) into 180 degrees.)
+    Vec ba = sub(a, b), ca = sub(a, c), cb = sub(b, c);
+    const Vec* corners[3][2] = {{&ab, &ac}, {&bc_edge, &ba}, {&ca, &cb}};
+    if (twice_area == 0) {
+      for (auto& [u, v] : corners) {
+        double angle = angle_deg(*u, *v);
+        min_angle = std::min(min_angle, angle);
+        max_angle = std::max(max_angle, angle);
+      }
+      continue;
     }
+    for (auto& [u, v] : corners) {
+      double cot = dot(*u, *v) / twice_area;
+      if (!has_corner || cot > smallest.cot) smallest = {*u, *v, cot};
+      if (!has_corner || cot < largest.cot) largest = {*u, *v, cot};
+      has_corner = true;
+    }
+  }
+  if (has_corner) {
+    min_angle = std::min(min_angle, angle_deg(smallest.u, smallest.v));
+    max_angle = std::max(max_angle, angle_deg(largest.u, largest.v));
   }
   if (T > 0) {
     m.min_angle_deg = min_angle;

@@ -154,6 +154,23 @@ TEST(Measures, RepeatedIndexCountsAsTriangleButNotAsEdge) {
   EXPECT_DOUBLE_EQ(r.min_angle_deg, 0.0);
 }
 
+TEST(Measures, DegenerateTrianglesHaveTheirLimitAngles) {
+  // A triangle on one vertex has three 0-degree corners (not 180: no -0.0 may reach atan2);
+  // a collinear one has 0, 0 and 180.
+  Mesh point = open_square();
+  point.triangles.push_back({2, 2, 2});
+  Measures p = compute_measures(point);
+  EXPECT_DOUBLE_EQ(p.min_angle_deg, 0.0);
+  EXPECT_DOUBLE_EQ(p.max_angle_deg, 90.0);
+  Mesh line = open_square();
+  line.positions.push_back({0.5f, 0, 0});
+  line.triangles.push_back({0, 4, 1});
+  Measures l = compute_measures(line);
+  EXPECT_DOUBLE_EQ(l.min_angle_deg, 0.0);
+  EXPECT_DOUBLE_EQ(l.max_angle_deg, 180.0);
+  EXPECT_EQ(l.degenerate_triangles, 1u);
+}
+
 TEST(Measures, UnreferencedVerticesAreNotComponents) {
   Mesh m = tetrahedron();
   m.positions.push_back({5, 5, 5});
