@@ -418,8 +418,24 @@ struct PlyReader {
       }
       return;
     }
+    // Fast path: the canonical face layout, one `list uchar int|uint vertex_indices`, little
+    // endian. A record that is not a triangle with indices in range takes the general path,
+    // which says what is wrong with it.
+    bool plain_faces = is_face && !swap && e.properties.size() == 1 && il == 0 &&
+                       e.properties[0].count_type == Scalar::UInt8 &&
+                       (e.properties[0].type == Scalar::Int32 || e.properties[0].type == Scalar::UInt32);
     for (std::uint64_t r = 0; r < e.count; ++r) {
       std::uint64_t record_byte = in.offset();
+      if (plain_faces && in.fill(13) >= 13 && in.data()[0] == 3) {
+        std::uint32_t ids[3];
+        std::memcpy(ids, in.data() + 1, 12);
+        if (ids[0] < vertex_count && ids[1] < vertex_count && ids[2] < vertex_count) {
+          out.triangle({ids[0], ids[1], ids[2]});
+          info.faces_read++;
+          in.skip(13);
+          continue;
+        }
+      }
       double xyz[3] = {0, 0, 0};
       for (int pi = 0; pi < static_cast<int>(e.properties.size()); ++pi) {
         const Property& p = e.properties[pi];
