@@ -25,13 +25,15 @@ namespace PMP = CGAL::Polygon_mesh_processing;
 
 P3 to_cgal(const Point& p) { return P3(p[0], p[1], p[2]); }
 
+std::uint64_t edge_key(Index a, Index b) { return std::uint64_t{std::min(a, b)} << 32 | std::max(a, b); }
+
 }  // namespace
 
 bool collinear(const Point& a, const Point& b, const Point& c) {
   return CGAL::collinear(to_cgal(a), to_cgal(b), to_cgal(c));
 }
 
-HoleFill fill_holes(const mesh::Mesh& input, bool skip_largest) {
+HoleFill fill_holes(const mesh::Mesh& input, bool skip_largest, std::span<const std::uint64_t> boundary_edges) {
   HoleFill out;
   // The referenced vertices as a polygon soup (point i of the soup = vertex soup_to_mesh[i]).
   std::vector<P3> points;
@@ -71,18 +73,23 @@ HoleFill fill_holes(const mesh::Mesh& input, bool skip_largest) {
 
   // Edges used by exactly one triangle of the input. Where the soup had to be cut (at
   // non-manifold or unorientable edges) the halfedge copy has border cycles along edges that
-  // are no boundary at all; a cycle with no boundary edge is such a cut, not a hole.
+  // are no boundary at all; a cycle with no boundary edge is such a cut, not a hole. When the
+  // input is a neighbourhood cut out of a larger mesh, `boundary_edges` names the true
+  // boundary, and a cycle through an edge of the cut (one triangle here, more there) is no hole.
   std::vector<std::uint64_t> edge_keys;
   for (const auto& polygon : polygons)
     for (std::size_t k = 0; k < 3; ++k) {
       Index a = soup_to_mesh[polygon[k]], b = soup_to_mesh[polygon[(k + 1) % 3]];
-      edge_keys.push_back(std::uint64_t{std::min(a, b)} << 32 | std::max(a, b));
+      edge_keys.push_back(edge_key(a, b));
     }
   std::sort(edge_keys.begin(), edge_keys.end());
-  auto is_boundary_edge = [&](Index a, Index b) {
-    auto key = std::uint64_t{std::min(a, b)} << 32 | std::max(a, b);
-    auto [first, last] = std::equal_range(edge_keys.begin(), edge_keys.end(), key);
-    return last - first == 1;
+  auto uses = [&](Index a, Index b) {
+    auto [first, last] = std::equal_range(edge_keys.begin(), edge_keys.end(), edge_key(a, b));
+    return last - first;
+  };
+  auto is_true_boundary = [&](Index a, Index b) {
+    if (boundary_edges.empty()) return uses(a, b) == 1;
+    return std::binary_search(boundary_edges.begin(), boundary_edges.end(), edge_key(a, b));
   };
 
   // One border halfedge per hole, with its length in edges.
@@ -91,12 +98,15 @@ HoleFill fill_holes(const mesh::Mesh& input, bool skip_largest) {
   for (auto h : sm.halfedges()) {
     if (!sm.is_border(h) || visited[h.idx()]) continue;
     std::size_t length = 0;
-    bool is_hole = false;
+    bool has_boundary = false, has_cut = false;
     for (auto g : CGAL::halfedges_around_face(h, sm)) {
       visited[g.idx()] = true, ++length;
-      is_hole = is_hole || is_boundary_edge(soup_to_mesh[sm.source(g).idx()], soup_to_mesh[sm.target(g).idx()]);
+      Index a = soup_to_mesh[sm.source(g).idx()], b = soup_to_mesh[sm.target(g).idx()];
+      bool boundary = is_true_boundary(a, b);
+      has_boundary = has_boundary || boundary;
+      has_cut = has_cut || (!boundary && uses(a, b) == 1);
     }
-    if (is_hole) holes.emplace_back(length, h);
+    if (has_boundary && !has_cut) holes.emplace_back(length, h);
   }
   if (skip_largest && !holes.empty()) {
     auto largest = std::max_element(holes.begin(), holes.end(),

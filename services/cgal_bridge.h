@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "mesh/mesh.h"
@@ -27,8 +28,10 @@ struct HoleFill {
 // back to triangulate+refine, then to a plain triangulation, then to a triangulation of the
 // loop as a polyline where every triangulation inside the mesh would repeat an edge). Loops are
 // found on a halfedge copy of the referenced triangles (non-manifold vertices duplicated);
-// `skip_largest` leaves the loop with the most edges open (height fields).
-HoleFill fill_holes(const mesh::Mesh& mesh, bool skip_largest);
+// `skip_largest` leaves the loop with the most edges open (height fields). `boundary_edges`
+// (sorted keys min << 32 | max), when given, are the true boundary edges: `mesh` is then a
+// neighbourhood of them cut out of a larger mesh, and loops along the cut are left alone.
+HoleFill fill_holes(const mesh::Mesh& mesh, bool skip_largest, std::span<const std::uint64_t> boundary_edges = {});
 
 // Metro-style distance (DESIGN §1 `compare`): samples spread uniformly by area on each surface,
 // distance of each to the other surface by an AABB tree. Distances are absolute.

@@ -16,6 +16,11 @@ using mesh::Index;
 using mesh::Point;
 using protocol::EditMesh;
 
+// How many rings of triangles around the boundary FillHoles hands to CGAL: the rim's own
+// triangles (the refinement's edge lengths) and two more (fairing's cotangent weights and
+// Voronoi areas at the rim).
+constexpr std::uint8_t kFillRings = 3;
+
 std::uint64_t edge_key(Index a, Index b) { return static_cast<std::uint64_t>(std::min(a, b)) << 32 | std::max(a, b); }
 
 // Live triangles of the mesh as (id, triangle) pairs.
@@ -322,15 +327,50 @@ void remove_degenerate_triangles(EditMesh& m) {
 }
 
 void fill_holes(EditMesh& m, bool keep_largest_loop) {
-  // A closed mesh has nothing to fill: spare it the halfedge copy.
   auto edges = edge_uses(m);
-  if (std::none_of(edges.begin(), edges.end(), [](const auto& e) { return e.second == 1; })) return;
-  mesh::Mesh current = m.compact();
-  // compact() renumbers; map its ids back to the slots of the mesh under edit.
-  std::vector<Index> slot_of;
-  for (std::size_t v = 0; v < m.vertex_slots(); ++v)
-    if (m.vertex_alive(static_cast<Index>(v))) slot_of.push_back(static_cast<Index>(v));
-  cgal::HoleFill fill = cgal::fill_holes(current, keep_largest_loop);
+  std::vector<std::uint64_t> boundary;  // sorted: edge_uses is
+  for (const auto& [key, count] : edges)
+    if (count == 1) boundary.push_back(key);
+  if (boundary.empty()) return;  // closed: nothing to fill
+  std::size_t V = m.vertex_slots();
+  std::vector<std::uint8_t> ring(V, 0);  // 1 + rings away from the boundary, 0: farther
+  std::vector<Index> parent(V);
+  std::iota(parent.begin(), parent.end(), 0);
+  auto find = [&](Index x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  std::size_t loops = 0;
+  for (std::uint64_t key : boundary) {
+    auto a = static_cast<Index>(key >> 32), b = static_cast<Index>(key & 0xffffffff);
+    for (Index v : {a, b})
+      if (!ring[v]) ring[v] = 1, ++loops;
+    if (find(a) != find(b)) parent[find(a)] = find(b), --loops;
+  }
+  if (keep_largest_loop && loops <= 1) return;  // the one loop a height field keeps
+  // CGAL gets the triangles within kFillRings rings of the boundary (all Liepa's refinement and
+  // fairing look at), not the whole mesh: a large mesh with a few holes costs little.
+  auto triangles = live_triangles(m);
+  for (std::uint8_t r = 1; r <= kFillRings; ++r)
+    for (auto& [id, t] : triangles)
+      if (ring[t[0]] == r || ring[t[1]] == r || ring[t[2]] == r)
+        for (Index v : t)
+          if (!ring[v]) ring[v] = static_cast<std::uint8_t>(r + 1);
+  mesh::Mesh current;  // the neighbourhood, vertices renumbered in slot order
+  std::vector<Index> slot_of, local(V, 0);
+  for (std::size_t v = 0; v < V; ++v)
+    if (ring[v]) {
+      local[v] = static_cast<Index>(slot_of.size());
+      slot_of.push_back(static_cast<Index>(v));
+      current.positions.push_back(m.position(static_cast<Index>(v)));
+    }
+  auto near = [&](Index v) { return ring[v] != 0 && ring[v] <= kFillRings; };
+  for (auto& [id, t] : triangles)
+    if (near(t[0]) || near(t[1]) || near(t[2])) current.triangles.push_back({local[t[0]], local[t[1]], local[t[2]]});
+  for (std::uint64_t& key : boundary)
+    key = edge_key(local[key >> 32], local[key & 0xffffffff]);
+  std::sort(boundary.begin(), boundary.end());
+  cgal::HoleFill fill = cgal::fill_holes(current, keep_largest_loop, boundary);
   const auto first_new = static_cast<Index>(current.positions.size());
   // The patches as a correction codes them best (protocol/correction.h): triangles in
   // depth-first order across shared edges, so that each repeats corners of the last few, and

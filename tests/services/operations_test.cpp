@@ -51,6 +51,31 @@ TEST(Operations, FillHolesClosesTheBunny) {
   EXPECT_GT(after.triangles, bunny.triangles.size());
 }
 
+// A 60 x 60 height field with a 4 x 4 hole: CGAL only sees a few rings around the two
+// loops; the cut around that neighbourhood must not be taken for a hole.
+TEST(Operations, FillHolesPatchesOnlyTrueLoopsOfALargeMesh) {
+  Mesh grid;
+  const int n = 60;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) grid.positions.push_back({float(i), float(j), 0.1f * float((i * 7 + j * 3) % 5)});
+  auto id = [&](int i, int j) { return static_cast<mesh::Index>(j * (n + 1) + i); };
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      if (i >= 28 && i < 32 && j >= 28 && j < 32) continue;
+      grid.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      grid.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  AtomicResult kept = run("FillHolesHeightField", grid);
+  auto m = mesh::compute_measures(kept.output);
+  EXPECT_EQ(m.boundary_loops, 1u);
+  EXPECT_TRUE(m.is_manifold);
+  EXPECT_GT(kept.output.triangles.size(), grid.triangles.size());
+  EXPECT_LT(kept.output.triangles.size(), grid.triangles.size() + 200);  // one small patch
+  // The untouched part is kept as it was, in order.
+  EXPECT_TRUE(std::equal(grid.triangles.begin(), grid.triangles.end(), kept.output.triangles.begin()));
+  EXPECT_EQ(mesh::compute_measures(run("FillHoles", grid).output).boundary_loops, 0u);
+}
+
 TEST(Operations, FillHolesHeightFieldKeepsTheLargestLoop) {
   Mesh holes = shared("defects/elephant-with-holes.off");
   AtomicResult r = run("FillHolesHeightField", holes);
