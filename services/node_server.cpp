@@ -2,6 +2,7 @@
 
 #include <httplib.h>
 
+#include <algorithm>
 #include <chrono>
 #include <condition_variable>
 #include <map>
@@ -24,7 +25,6 @@ namespace {
 using nlohmann::json;
 using Clock = std::chrono::steady_clock;
 
-constexpr std::chrono::seconds kRunAnswerWait{20};      // then 202 + task URL
 constexpr std::chrono::minutes kInputWait{30};          // pending download/update of an input
 constexpr std::size_t kMaxJsonBody = 1 << 20;
 const char* kVersion = "0.1.0";
@@ -145,12 +145,20 @@ struct NodeServer::Impl {
     origins = std::move(fresh);
   }
 
+  bool offers(const std::string& name) const {
+    return options.operations.empty() ||
+           std::find(options.operations.begin(), options.operations.end(), name) != options.operations.end();
+  }
+
   json service_json() const {
+    json offered = json::array();
+    for (const auto& op : operations_to_json())
+      if (offers(op.value("name", ""))) offered.push_back(op);
     return {{"name", "meshflow-node"},
             {"version", kVersion},
             {"url", url()},
             {"capacity_vertices", options.capacity_vertices},
-            {"operations", operations_to_json()}};
+            {"operations", offered}};
   }
 
   // Runs one operation on the mesh named by `input` (URL or SHA-256). Atomic operations store
@@ -253,7 +261,8 @@ struct NodeServer::Impl {
     server.Get(R"(/cache/([0-9a-f]{64}))", [this](const httplib::Request& req, httplib::Response& res) {
       auto entry = cache->find(req.matches[1]);
       if (!entry) throw protocol::NotFound("no cache entry for " + std::string(req.matches[1]));
-      json body{{"state", protocol::to_string(entry->state)}, {"ms", entry->ms}, {"how", entry->how}};
+      json body{{"state", protocol::to_string(entry->state)}, {"ms", entry->ms}, {"how", entry->how},
+                {"bytes", entry->bytes}, {"fetch_ms", entry->fetch_ms}, {"apply_ms", entry->apply_ms}};
       if (!entry->error.empty()) body["error"] = entry->error;
       res.set_content(body.dump(), "application/json");
     });
@@ -262,6 +271,7 @@ struct NodeServer::Impl {
       json body = parse_body(req);
       std::string name = req.matches[1];
       find_operation(name);  // unknown names: 400 before a task starts
+      if (!offers(name)) throw protocol::NotFound("this node does not offer " + name);
       auto task = std::make_shared<Task>();
       std::string id;
       {
@@ -290,7 +300,7 @@ struct NodeServer::Impl {
         task_done.notify_all();
       }).detach();
       std::unique_lock lock(tasks_mutex);
-      task_done.wait_for(lock, kRunAnswerWait, [&] { return task->state != "running"; });
+      task_done.wait_for(lock, options.answer_within, [&] { return task->state != "running"; });
       if (task->state == "running") {
         res.status = 202;
         res.set_content(json{{"task", url() + "/tasks/" + id}, {"state", "running"}}.dump(),
@@ -313,7 +323,10 @@ struct NodeServer::Impl {
       const Task& task = *it->second;
       json body{{"state", task.state}};
       if (task.state == "done") body["result"] = task.result;
-      if (!task.error.empty()) body["error"] = json::parse(task.error, nullptr, false);
+      if (!task.error.empty()) {
+        body["error"] = json::parse(task.error, nullptr, false);
+        body["status"] = task.error_status;
+      }
       res.set_content(body.dump(), "application/json");
     });
     server.Delete(R"(/tasks/(\d+))", [this](const httplib::Request& req, httplib::Response& res) {
