@@ -119,7 +119,10 @@ BroadcastReport HttpNodeClient::broadcast_report(const std::string& input_sha256
     if (entry.value("state", "") != "ready") continue;
     report.nodes.push_back(node);
     report.ms = std::max<std::int64_t>(report.ms, entry.value("ms", std::int64_t{0}));
-    report.bytes = std::max<std::uint64_t>(report.bytes, entry.value("bytes", std::uint64_t{0}));
+    std::uint64_t bytes = entry.value("bytes", std::uint64_t{0});
+    report.bytes = std::max<std::uint64_t>(report.bytes, bytes);
+    if (options_.measured && bytes > 0 && entry.value("how", "") == "download")
+      options_.measured(node, bytes, entry.value("fetch_ms", std::int64_t{0}));
   }
   return report;
 }
@@ -255,6 +258,7 @@ StepReport HttpNodeClient::run_atomic(const std::string& operation, const servic
   forward(answer.node, base, answer, report);
   current_url_ = answer.body.value("output", "");
   current_sha_ = answer.body.value("sha256", "");
+  current_node_ = answer.node;
   return report;
 }
 

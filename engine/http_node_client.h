@@ -66,10 +66,13 @@ class HttpNodeClient : public NodeClient {
 
   const std::string& current_url() const { return current_url_; }
   const std::string& current_sha256() const { return current_sha_; }
+  // The node that produced the current mesh ("" while it is the input).
+  const std::string& current_node() const { return current_node_; }
   // Resuming a job: the mesh after the last finished step is already on the nodes.
-  void set_current(std::string url, std::string sha256) {
+  void set_current(std::string url, std::string sha256, std::string node) {
     current_url_ = std::move(url);
     current_sha_ = std::move(sha256);
+    current_node_ = std::move(node);
   }
   std::vector<std::string> nodes_taking_part() const;
   const std::map<std::string, std::string>& placement() const { return plan_; }
@@ -83,7 +86,7 @@ class HttpNodeClient : public NodeClient {
   bool is_dead(const std::string& node) const;
 
   HttpNodeOptions options_;
-  std::string current_url_, current_sha_;
+  std::string current_url_, current_sha_, current_node_;
   std::map<std::string, std::string> plan_;  // operation -> node
   std::vector<std::string> later_;
   std::vector<std::string> dead_;

@@ -190,6 +190,32 @@ HttpResult http_request(const std::string& method, const std::string& url,
   return result;
 }
 
+HttpResult http_post_form(const std::string& url, const std::vector<FormPart>& parts,
+                          const HttpOptions& options) {
+  init_curl_once();
+  CurlHandle h;
+  if (!h.curl) return {0, {}, "cannot create a libcurl handle"};
+  common_options(h, url, options);
+  std::unique_ptr<curl_mime, decltype(&curl_mime_free)> mime(curl_mime_init(h.curl), curl_mime_free);
+  for (const auto& part : parts) {
+    curl_mimepart* field = curl_mime_addpart(mime.get());
+    curl_mime_name(field, part.name.c_str());
+    if (part.file_path.empty()) {
+      curl_mime_data(field, part.value.data(), part.value.size());
+    } else if (curl_mime_filedata(field, part.file_path.c_str()) != CURLE_OK) {
+      return {0, {}, "cannot read " + part.file_path};
+    }
+  }
+  std::string response;
+  curl_easy_setopt(h.curl, CURLOPT_MIMEPOST, mime.get());
+  curl_easy_setopt(h.curl, CURLOPT_HTTPHEADER, h.headers);
+  curl_easy_setopt(h.curl, CURLOPT_WRITEFUNCTION, append_to_string);
+  curl_easy_setopt(h.curl, CURLOPT_WRITEDATA, &response);
+  HttpResult result = finish(h, curl_easy_perform(h.curl));
+  result.body = std::move(response);
+  return result;
+}
+
 DownloadResult http_download(const std::string& url, const std::string& path,
                              const std::optional<std::string>& expected_sha256,
                              bool decompress_zstd, const HttpOptions& options) {

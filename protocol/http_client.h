@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace meshflow::protocol {
 
@@ -45,6 +46,16 @@ struct DownloadResult : HttpResult {
 DownloadResult http_download(const std::string& url, const std::string& path,
                              const std::optional<std::string>& expected_sha256 = std::nullopt,
                              bool decompress_zstd = false, const HttpOptions& options = {});
+
+// A multipart/form-data POST (what a browser form sends): text fields, and files streamed from
+// disk. The answer's body is returned as with http_request.
+struct FormPart {
+  std::string name;
+  std::string value;      // the text of a field
+  std::string file_path;  // or: a file streamed from disk (value is then ignored)
+};
+HttpResult http_post_form(const std::string& url, const std::vector<FormPart>& parts,
+                          const HttpOptions& options = {});
 
 // Scheme, host and port of a URL ("http://127.0.0.1:8080"), for allow-lists.
 std::string url_origin(const std::string& url);

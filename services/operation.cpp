@@ -159,7 +159,7 @@ AtomicResult run_atomic(const OperationSpec& spec, const mesh::Mesh& input, cons
   if (spec.name == "RemoveSmallestComponents") remove_smallest_components(m);
   else if (spec.name == "RemoveDegenerateTriangles") remove_degenerate_triangles(m);
   else if (spec.name == "AddNoise") add_noise(m, percent("maxDistance"), static_cast<std::uint64_t>(params.at("seed")));
-  else if (spec.name == "LaplacianSmoothing") laplacian_smoothing(m, static_cast<int>(params.at("iterations")));
+  else if (spec.name == "LaplacianSmoothing") laplacian_smoothing(m, static_cast<int>(params.at("iterations")), context.cancel);
   else if (spec.name == "FillHoles") fill_holes(m, false);
   else if (spec.name == "FillHolesHeightField") fill_holes(m, true);
   else throw InvalidInput("operation " + spec.name + " has no implementation");

@@ -30,7 +30,7 @@ class ReplayingNodes : public engine::NodeClient {
       : done_(std::move(done)), live_(live) {}
   engine::StepReport run_atomic(const std::string& operation, const services::Params& params) override {
     if (const engine::StepRecord* r = next(operation)) {
-      if (!r->output_url.empty()) live_.set_current(r->output_url, r->output_sha256);
+      if (!r->output_url.empty()) live_.set_current(r->output_url, r->output_sha256, r->node);
       return report_of(*r);
     }
     return live_.run_atomic(operation, params);
@@ -272,9 +272,14 @@ void JobManager::run(const std::string& id) {
     std::filesystem::path fetched = job_dir(id) / "output.ply.zst";
     protocol::HttpOptions http;
     http.timeout = std::chrono::minutes(30);
+    auto fetching = std::chrono::steady_clock::now();
     protocol::DownloadResult got =
         protocol::http_download(live.current_url(), fetched.string(), live.current_sha256(), true, http);
     if (!got.ok()) throw IoError("fetching the result from " + live.current_url() + ": " + got.describe());
+    if (!live.current_node().empty())
+      services_.record_transfer(live.current_node(), got.bytes,
+                                std::chrono::duration_cast<std::chrono::milliseconds>(
+                                    std::chrono::steady_clock::now() - fetching).count());
     mesh::Mesh output = mesh::read_mesh(fetched.string());
     mesh::write_mesh(output, output_file(id).string());
     std::filesystem::remove(fetched);
