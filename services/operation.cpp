@@ -123,7 +123,9 @@ const OperationSpec& find_operation(std::string_view name) {
 
 Params resolve_params(const OperationSpec& spec, const std::map<std::string, std::string>& given) {
   Params params;
-  for (const auto& [name, text] : given) {
+  for (const auto& entry : given) {
+    const std::string& name = entry.first;  // (clang 14 cannot capture structured bindings)
+    const std::string& text = entry.second;
     auto it = std::find_if(spec.params.begin(), spec.params.end(), [&](const ParamSpec& p) { return p.name == name; });
     if (it == spec.params.end()) {
       std::string known;
