@@ -20,6 +20,7 @@ struct HubArgs {
   std::string data = "meshflow-data";
   int nodes = 2;
   bool allow_private_fetch = false;
+  int max_loop = 100;
 };
 
 web::HubOptions hub_options(const HubArgs& args) {
@@ -28,6 +29,7 @@ web::HubOptions hub_options(const HubArgs& args) {
   options.port = args.port;
   options.data_dir = args.data;
   options.allow_private_fetch = args.allow_private_fetch;
+  options.max_loop_iterations = args.max_loop;
   return options;
 }
 
@@ -86,6 +88,8 @@ void add_common(CLI::App* cmd, HubArgs& args) {
   cmd->add_option("--data", args.data, "Data directory");
   cmd->add_flag("--allow-private-fetch", args.allow_private_fetch,
                 "Let jobs fetch input_url from loopback and private addresses");
+  cmd->add_option("--max-loop", args.max_loop, "Bound on the iterations of each while loop of a job")
+      ->check(CLI::PositiveNumber);
 }
 
 void add_hub_commands(CLI::App& app, int& exit_status) {

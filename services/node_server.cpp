@@ -89,7 +89,10 @@ struct NodeServer::Impl {
     std::string error;
     int error_status = 500;
     std::atomic<bool> cancel{false};
+    Clock::time_point finished;
   };
+  // A finished task's answer stays this long for its poller, then goes.
+  static constexpr std::chrono::minutes kKeepFinishedTasks{10};
   std::mutex tasks_mutex;
   std::condition_variable task_done;
   std::map<std::string, std::shared_ptr<Task>> tasks;
@@ -276,6 +279,9 @@ struct NodeServer::Impl {
       std::string id;
       {
         std::lock_guard lock(tasks_mutex);
+        std::erase_if(tasks, [](const auto& entry) {
+          return entry.second->state != "running" && Clock::now() - entry.second->finished > kKeepFinishedTasks;
+        });
         id = std::to_string(next_task++);
         tasks[id] = task;
       }
@@ -297,6 +303,7 @@ struct NodeServer::Impl {
         task->result = std::move(result);
         task->error = std::move(error);
         task->error_status = status;
+        task->finished = Clock::now();
         task_done.notify_all();
       }).detach();
       std::unique_lock lock(tasks_mutex);

@@ -245,6 +245,7 @@ void JobManager::run(const std::string& id) {
       if (s.state == "done") done.push_back(s);
     ReplayingNodes nodes(done, live);
     engine::ExecutorOptions exec;
+    exec.max_loop_iterations = max_loop_iterations_;
     exec.cancelled = [cancelled] { return cancelled->load(); };
     exec.on_step = [&](const engine::StepReport& r) {
       engine::StepRecord s;

@@ -44,6 +44,8 @@ class JobManager {
     allow_private_fetch_ = allow_private;
     max_fetch_bytes_ = max_bytes;
   }
+  // The bound on each while loop's iterations (a job past it fails with a clear error).
+  void set_max_loop_iterations(int bound) { max_loop_iterations_ = bound; }
 
   // Validates the workflow (XSD + operations) and the input: an uploaded mesh is read and
   // canonicalised to DATA/jobs/ID/input.ply.zst now; an input URL is checked now (http(s),
@@ -70,6 +72,7 @@ class JobManager {
   std::string hub_url_;
   bool allow_private_fetch_ = false;
   std::uint64_t max_fetch_bytes_ = 8ull << 30;
+  int max_loop_iterations_ = 100;
   engine::JobJournal journal_;
   mutable std::mutex mutex_;
   std::condition_variable wake_;

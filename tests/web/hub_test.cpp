@@ -446,6 +446,13 @@ TEST(Hub, AnUpdateWhoseHashDiffersFallsBackToTheWholeOutput) {
                                       json{{"input", noisy["sha256"]}}.dump(), http);
   EXPECT_TRUE(count.ok()) << count.describe();
   EXPECT_EQ(protocol::http_request("GET", b + "/cache/" + smooth["sha256"].get<std::string>()).status, 404);
+  // Nodes fetch only from the hub and registered nodes; their routes need the node token, and
+  // so does registering with the hub.
+  auto stranger = protocol::http_request("POST", b + "/download", json{{"url", "http://127.0.0.2:9/m.ply.zst"}}.dump(), http);
+  EXPECT_EQ(stranger.status, 403) << stranger.describe();
+  EXPECT_NE(stranger.body.find("refusing to fetch from http://127.0.0.2:9"), std::string::npos) << stranger.body;
+  EXPECT_EQ(protocol::http_request("POST", b + "/download", json{{"url", input}}.dump()).status, 401);
+  EXPECT_EQ(protocol::http_request("POST", hub + "/api/services", json{{"url", b}}.dump()).status, 401);
 }
 
 }  // namespace
