@@ -370,9 +370,9 @@ TEST(Hub, ANodeKilledMidStepIsReplacedAndTheJobFinishes) {
   // A check and a long smoothing: the plan puts them on different nodes.
   const char* xml = "<workflow><body>"
                     "<if><condition><analysis><name>IsManifold</name></analysis></condition><body/></if>"
-                    "<atomic><name>LaplacianSmoothing</name><parameters><parameter>1500</parameter></parameters></atomic>"
+                    "<atomic><name>LaplacianSmoothing</name><parameters><parameter>2000</parameter></parameters></atomic>"
                     "</body></workflow>";
-  std::string id = submit(hub, dir, xml, shared_meshes() + "/real/igea_tristrips.ply");
+  std::string id = submit(hub, dir, xml, shared_meshes() + "/real/dragon_100k.ply");
   ASSERT_FALSE(id.empty());
   std::string victim;
   for (int i = 0; i < 500 && victim.empty(); ++i) {
@@ -383,7 +383,7 @@ TEST(Hub, ANodeKilledMidStepIsReplacedAndTheJobFinishes) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   ASSERT_TRUE(nodes.count(victim)) << victim;
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // well inside the step
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // well inside the step
   nodes[victim]->kill_now();
   json job = wait_for(hub, id);
   ASSERT_EQ(job["state"], "done") << job.dump();
@@ -395,7 +395,7 @@ TEST(Hub, ANodeKilledMidStepIsReplacedAndTheJobFinishes) {
   ASSERT_TRUE(got.ok()) << got.describe();
   std::ofstream(dir.file("w.xml")) << xml;
   ASSERT_EQ(shell(std::string(MESHFLOW_BINARY) + " run " + dir.file("w.xml") + " " + shared_meshes() +
-                  "/real/igea_tristrips.ply -o " + dir.file("ref.ply") + " 2>/dev/null"),
+                  "/real/dragon_100k.ply -o " + dir.file("ref.ply") + " 2>/dev/null"),
             0);
   EXPECT_EQ(mesh::read_mesh(dir.file("out.ply")), mesh::read_mesh(dir.file("ref.ply")));
 }
