@@ -1,6 +1,7 @@
 #include "engine/http_node_client.h"
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <nlohmann/json.hpp>
 #include <thread>
@@ -36,13 +37,31 @@ class Backoff {
   std::chrono::milliseconds slowest_;
 };
 
-// A node's cache entry for `sha`, once it is no longer pending (or the deadline passes).
-json settled_cache_entry(const std::string& node, const std::string& sha, const protocol::HttpOptions& http,
-                         Clock::duration limit, const std::function<bool()>& cancelled) {
+std::string url_encode(const std::string& text) {
+  static const char* hex = "0123456789ABCDEF";
+  std::string out;
+  for (unsigned char c : text) {
+    if (std::isalnum(c) || c == '-' || c == '_' || c == '.' || c == '~') {
+      out += static_cast<char>(c);
+    } else {
+      out += '%';
+      out += hex[c >> 4];
+      out += hex[c & 15];
+    }
+  }
+  return out;
+}
+
+// A node's cache entry for the mesh `sha` fetched from `url`, once it is no longer pending
+// (or the deadline passes).
+json settled_cache_entry(const std::string& node, const std::string& sha, const std::string& url,
+                         const protocol::HttpOptions& http, Clock::duration limit,
+                         const std::function<bool()>& cancelled) {
   auto deadline = Clock::now() + limit;
   Backoff backoff(kSlowestPoll);
+  std::string query = node + "/cache/" + sha + "?url=" + url_encode(url);
   for (;;) {
-    protocol::HttpResult res = protocol::http_request("GET", node + "/cache/" + sha, {}, http);
+    protocol::HttpResult res = protocol::http_request("GET", query, {}, http);
     if (res.status == 0) return json{{"state", "failed"}, {"error", res.describe()}};
     json state = json::parse(res.body, nullptr, false);
     if (!state.is_object()) state = json{{"state", "failed"}, {"error", res.describe()}};
@@ -70,7 +89,12 @@ struct HttpNodeClient::Answer {
 };
 
 HttpNodeClient::HttpNodeClient(HttpNodeOptions options, std::string input_url, std::string input_sha256)
-    : options_(std::move(options)), current_url_(std::move(input_url)), current_sha_(std::move(input_sha256)) {}
+    : options_(std::move(options)), input_url_(input_url), input_sha_(input_sha256),
+      current_url_(std::move(input_url)), current_sha_(std::move(input_sha256)) {}
+
+HttpNodeClient::~HttpNodeClient() {
+  if (broadcaster_.joinable()) broadcaster_.join();
+}
 
 bool HttpNodeClient::is_dead(const std::string& node) const {
   return std::find(dead_.begin(), dead_.end(), node) != dead_.end();
@@ -103,28 +127,72 @@ std::vector<std::string> HttpNodeClient::nodes_taking_part() const {
 }
 
 void HttpNodeClient::broadcast() {
+  std::vector<std::string> targets = nodes_taking_part();  // in order of first use
+  {
+    std::lock_guard lock(broadcast_mutex_);
+    to_tell_ = targets;
+  }
+  broadcaster_ = std::thread([this, targets] { run_broadcast(targets); });
+}
+
+void HttpNodeClient::run_broadcast(std::vector<std::string> targets) {
+  auto start = Clock::now();
   protocol::HttpOptions http;
   http.timeout = kNoticeTimeout;
   http.bearer_token = options_.token;
-  std::string body = json{{"url", current_url_}, {"sha256", current_sha_}}.dump();
-  for (const auto& node : nodes_taking_part()) protocol::http_request("POST", node + "/download", body, http);
+  auto told = [&](const std::string& node) {
+    std::lock_guard lock(broadcast_mutex_);
+    std::erase(to_tell_, node);
+    broadcast_changed_.notify_all();
+  };
+  try {
+    std::vector<std::string> sources{input_url_};  // URLs the input can be fetched from
+    std::size_t next = 0;
+    while (next < targets.size()) {
+      std::vector<std::pair<std::string, std::string>> round;  // node, where it fetches from
+      for (const auto& source : sources) {
+        if (next == targets.size()) break;
+        round.emplace_back(targets[next++], source);
+      }
+      for (const auto& [node, url] : round) {
+        protocol::http_request("POST", node + "/download", json{{"url", url}, {"sha256", input_sha_}}.dump(), http);
+        told(node);
+      }
+      for (const auto& [node, url] : round) {
+        json entry = settled_cache_entry(node, input_sha_, url, http, std::chrono::minutes(30), options_.cancelled);
+        if (entry.value("state", "") == "ready") {
+          sources.push_back(node + "/files/" + input_sha_ + ".ply.zst");
+          std::uint64_t bytes = entry.value("bytes", std::uint64_t{0});
+          broadcast_.bytes = std::max(broadcast_.bytes, bytes);
+          broadcast_.nodes.push_back(node);
+          if (options_.measured && bytes > 0 && entry.value("how", "") == "download")
+            options_.measured(node, bytes, entry.value("fetch_ms", std::int64_t{0}));
+        } else if (url != input_url_) {
+          // The node it fetched from failed it: straight from the hub then (its /run would too).
+          protocol::http_request("POST", node + "/download", json{{"url", input_url_}, {"sha256", input_sha_}}.dump(),
+                                 http);
+        }
+      }
+    }
+  } catch (...) {
+    // Cancelled: nodes left out fetch their input themselves when a step needs it.
+  }
+  {
+    std::lock_guard lock(broadcast_mutex_);
+    to_tell_.clear();
+    broadcast_changed_.notify_all();
+  }
+  broadcast_.ms = std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - start).count();
 }
 
-BroadcastReport HttpNodeClient::broadcast_report(const std::string& input_sha256) {
-  BroadcastReport report;
-  protocol::HttpOptions http;
-  http.timeout = kNoticeTimeout;
-  for (const auto& node : nodes_taking_part()) {
-    json entry = settled_cache_entry(node, input_sha256, http, std::chrono::minutes(5), options_.cancelled);
-    if (entry.value("state", "") != "ready") continue;
-    report.nodes.push_back(node);
-    report.ms = std::max<std::int64_t>(report.ms, entry.value("ms", std::int64_t{0}));
-    std::uint64_t bytes = entry.value("bytes", std::uint64_t{0});
-    report.bytes = std::max<std::uint64_t>(report.bytes, bytes);
-    if (options_.measured && bytes > 0 && entry.value("how", "") == "download")
-      options_.measured(node, bytes, entry.value("fetch_ms", std::int64_t{0}));
-  }
-  return report;
+void HttpNodeClient::wait_until_told(const std::string& node) {
+  std::unique_lock lock(broadcast_mutex_);
+  broadcast_changed_.wait(lock, [&] { return std::find(to_tell_.begin(), to_tell_.end(), node) == to_tell_.end(); });
+}
+
+BroadcastReport HttpNodeClient::broadcast_report() {
+  if (broadcaster_.joinable()) broadcaster_.join();
+  return broadcast_;
 }
 
 HttpNodeClient::Answer HttpNodeClient::run_on_some_node(const std::string& operation, const std::string& body) {
@@ -135,6 +203,7 @@ HttpNodeClient::Answer HttpNodeClient::run_on_some_node(const std::string& opera
     protocol::HttpOptions http;
     http.timeout = kCallTimeout;
     http.bearer_token = options_.token;
+    wait_until_told(node);  // else it would fetch the input itself, beside the broadcast
     if (options_.on_start) options_.on_start(operation, node);
     if (options_.load) options_.load(node, +1);
     struct Unload {
@@ -216,6 +285,7 @@ void HttpNodeClient::forward(const std::string& from_node, const std::string& ba
   std::string output = answer.body.value("output", "");
   std::string correction = answer.body.value("correction", "");
   std::string sha = answer.body.value("sha256", "");
+  if (sha == base_sha) return;  // the step changed nothing: later nodes have (or are fetching) it
   bool send_correction = options_.transfer == TransferMode::Smaller && report.correction_bytes > 0 &&
                          report.correction_bytes < report.output_bytes;
   report.sent = send_correction ? "correction" : "output";
@@ -226,12 +296,13 @@ void HttpNodeClient::forward(const std::string& from_node, const std::string& ba
                   ? json{{"base", base_sha}, {"correction", correction}, {"result", output}, {"result_sha256", sha}}
                   : json{{"url", output}, {"sha256", sha}};
   std::vector<std::string> told;
+  for (const auto& node : targets) wait_until_told(node);  // an update needs its base coming
   for (const auto& node : targets)
     if (protocol::http_request("POST", node + (send_correction ? "/update" : "/download"), body.dump(), http).ok())
       told.push_back(node);
   // The next step starts once every later node has the result (thesis §4.2).
   for (const auto& node : told) {
-    json entry = settled_cache_entry(node, sha, http, kUpdateTimeout, options_.cancelled);
+    json entry = settled_cache_entry(node, sha, output, http, kUpdateTimeout, options_.cancelled);
     if (entry.value("state", "") != "ready") continue;  // its /run will fetch the output itself
     std::int64_t fetch_ms = entry.value("fetch_ms", std::int64_t{0});
     std::uint64_t bytes = entry.value("bytes", std::uint64_t{0});

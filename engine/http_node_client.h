@@ -1,18 +1,24 @@
 #pragma once
 // The NodeClient of the hub's jobs: runs each step on an HTTP node and carries out the mesh
 // transfer protocol (DESIGN §6, thesis §4.2). Before the first step it places every operation
-// the workflow uses on a node (engine/node_choice.h) and asks each node taking part to
-// download the input; after each atomic step it sends the correction or the whole output,
+// the workflow uses on a node (engine/node_choice.h) and has each node taking part download
+// the input, along a binomial tree: the hub sends it to the node of the first step, then every
+// node that has it passes it on to one more while the hub serves another, so the hub's link
+// carries about log2(N + 1) copies instead of N, and the first step starts after one copy.
+// After each atomic step it sends the correction or the whole output,
 // whichever is smaller, to every node that runs a later operation, and starts the next step
 // once they all have it. A node that fails mid-step is left out: its operations move to
 // another node offering them and the step runs again there.
 
 #include <chrono>
+#include <condition_variable>
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <mutex>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "engine/node_choice.h"
@@ -54,11 +60,12 @@ class HttpNodeClient : public NodeClient {
 
   // Places each operation on a node. \throws IoError when no node offers one of them.
   void plan(const std::vector<std::string>& operations);
-  // Asks every node taking part to download the current mesh (one-way; the nodes fetch in
-  // parallel and a node's /run waits for its download).
+  // Starts the input broadcast in the background and returns at once (a node's /run waits for
+  // its download).
   void broadcast();
-  // Waits (bounded) until the nodes taking part hold the input; how long the slowest took.
-  BroadcastReport broadcast_report(const std::string& input_sha256);
+  // Waits (bounded) until the broadcast is over: how long it took until every node had it.
+  BroadcastReport broadcast_report();
+  ~HttpNodeClient() override;
 
   StepReport run_atomic(const std::string& operation, const services::Params& params) override;
   StepReport run_analysis(const std::string& operation) override;
@@ -84,8 +91,17 @@ class HttpNodeClient : public NodeClient {
   void forward(const std::string& from_node, const std::string& base_sha, const Answer& answer,
                StepReport& report);
   bool is_dead(const std::string& node) const;
+  void run_broadcast(std::vector<std::string> targets);
+  void wait_until_told(const std::string& node);  // its input download has been asked for
 
   HttpNodeOptions options_;
+  std::string input_url_, input_sha_;
+  // The broadcast, in its own thread.
+  std::thread broadcaster_;
+  std::mutex broadcast_mutex_;
+  std::condition_variable broadcast_changed_;
+  std::vector<std::string> to_tell_;  // nodes whose download is not asked for yet
+  BroadcastReport broadcast_;
   std::string current_url_, current_sha_, current_node_;
   std::map<std::string, std::string> plan_;  // operation -> node
   std::vector<std::string> later_;

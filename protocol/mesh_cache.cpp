@@ -127,7 +127,8 @@ void MeshCache::download(const std::string& url, const std::optional<std::string
     CacheEntry alias = entries_.at(url_of_sha_.at(*sha256));
     alias.url = url;
     alias.how = "local";
-    alias.ms = 0;
+    alias.ms = alias.fetch_ms = alias.apply_ms = 0;
+    alias.bytes = 0;
     entries_[url] = alias;
     return;
   }
@@ -147,7 +148,8 @@ void MeshCache::update(const std::string& base_sha256, const std::string& correc
     CacheEntry alias = entries_.at(url_of_sha_.at(result_sha256));
     alias.url = result_url;
     alias.how = "local";
-    alias.ms = 0;
+    alias.ms = alias.fetch_ms = alias.apply_ms = 0;
+    alias.bytes = 0;
     entries_[result_url] = alias;
     return;
   }
@@ -269,9 +271,20 @@ std::optional<CacheEntry> MeshCache::find(const std::string& key) const {
   if (it != entries_.end()) return it->second;
   auto by_sha = url_of_sha_.find(key);
   if (by_sha != url_of_sha_.end()) return entries_.at(by_sha->second);
-  for (const auto& [url, entry] : entries_)  // a pending entry known by its expected hash
-    if (entry.sha256 == key) return entry;
+  if (const CacheEntry* entry = by_expected_sha(key)) return *entry;
   return std::nullopt;
+}
+
+// An entry not ready yet, known by the hash it should yield: a pending one before a failed one
+// (a download that failed may have been asked again from elsewhere).
+const CacheEntry* MeshCache::by_expected_sha(const std::string& sha256) const {
+  const CacheEntry* failed = nullptr;
+  for (const auto& [url, entry] : entries_) {
+    if (entry.sha256 != sha256) continue;
+    if (entry.state != CacheState::Failed) return &entry;
+    failed = &entry;
+  }
+  return failed;
 }
 
 MeshCache::Loaded MeshCache::wait_mesh(const std::string& key, std::chrono::milliseconds timeout) {
@@ -288,9 +301,7 @@ MeshCache::Loaded MeshCache::wait_mesh(const std::string& key, std::chrono::mill
       if (it != entries_.end()) return &it->second;
       auto by_sha = url_of_sha_.find(key);
       if (by_sha != url_of_sha_.end()) return &entries_.at(by_sha->second);
-      for (const auto& [url, entry] : entries_)
-        if (entry.sha256 == key) return &entry;
-      return nullptr;
+      return by_expected_sha(key);
     };
     bool settled = changed_.wait_for(lock, timeout, [&] {
       const CacheEntry* e = current();

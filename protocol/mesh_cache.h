@@ -104,6 +104,7 @@ class MeshCache {
   void remember(const std::string& sha256, std::shared_ptr<const mesh::Mesh> mesh);
   void store_as(std::shared_ptr<const mesh::Mesh> mesh, const std::string& sha256);
   void check_origin(const std::string& url) const;
+  const CacheEntry* by_expected_sha(const std::string& sha256) const;  // \pre mutex_ held
 
   MeshCacheOptions options_;
   sqlite3* db_ = nullptr;

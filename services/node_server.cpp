@@ -261,9 +261,12 @@ struct NodeServer::Impl {
       res.status = 202;
       res.set_content(json{{"state", "pending"}, {"result", result}}.dump(), "application/json");
     });
+    // ?url=U: the entry of that download or update (several may yield the same mesh).
     server.Get(R"(/cache/([0-9a-f]{64}))", [this](const httplib::Request& req, httplib::Response& res) {
-      auto entry = cache->find(req.matches[1]);
-      if (!entry) throw protocol::NotFound("no cache entry for " + std::string(req.matches[1]));
+      std::string sha = req.matches[1];
+      auto entry = cache->find(req.has_param("url") ? req.get_param_value("url") : sha);
+      if (entry && entry->sha256 != sha) entry.reset();
+      if (!entry) throw protocol::NotFound("no cache entry for " + sha);
       json body{{"state", protocol::to_string(entry->state)}, {"ms", entry->ms}, {"how", entry->how},
                 {"bytes", entry->bytes}, {"fetch_ms", entry->fetch_ms}, {"apply_ms", entry->apply_ms}};
       if (!entry->error.empty()) body["error"] = entry->error;

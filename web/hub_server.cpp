@@ -279,6 +279,7 @@ int HubServer::start() {
     throw IoError("cannot listen on " + d.options.host + ":" + std::to_string(d.options.port));
   d.jobs->set_fetch_policy(d.options.allow_private_fetch, d.options.max_upload_bytes);
   d.jobs->set_max_loop_iterations(d.options.max_loop_iterations);
+  d.jobs->set_default_transfer(d.options.default_transfer);
   d.jobs->start(d.url());
   d.thread = std::thread([&d] { d.server.listen_after_bind(); });
   d.services->prune_unreachable();

@@ -26,6 +26,7 @@ struct HubOptions {
   int threads = 16;
   std::string public_url;                      // how nodes reach the hub; default http://host:port
   int max_loop_iterations = 100;               // bound on each while loop of a job
+  std::string default_transfer = "smaller";    // jobs' default: "output" forces whole meshes
 };
 
 class HubServer {

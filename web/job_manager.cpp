@@ -123,14 +123,15 @@ std::string JobManager::submit(const std::string& workflow_xml, const std::files
 std::string JobManager::submit(const JobRequest& request) {
   engine::Workflow workflow = engine::parse_workflow(request.workflow_xml, "workflow.xml");
   engine::validate_workflow(workflow, "workflow.xml", services::operation_specs());
-  engine::transfer_mode_from_string(request.transfer);  // a clear 400 for a bad value
+  std::string transfer = request.transfer.empty() ? default_transfer_ : request.transfer;
+  engine::transfer_mode_from_string(transfer);  // a clear 400 for a bad value
   const std::string& id = request.id;
   std::filesystem::create_directories(job_dir(id));
   engine::JobRecord job;
   job.id = id;
   job.workflow_xml = request.workflow_xml;
   job.workflow_id = request.workflow_id;
-  job.transfer = request.transfer.empty() ? "smaller" : request.transfer;
+  job.transfer = transfer;
   if (!request.upload.empty()) {
     mesh::Mesh input = mesh::read_mesh(request.upload.string());
     mesh::write_mesh(input, input_file(id).string());
@@ -268,7 +269,7 @@ void JobManager::run(const std::string& id) {
       journal_.put_step(id, s);
     };
     engine::execute(valid, nodes, exec);
-    engine::BroadcastReport broadcast = live.broadcast_report(job->input_sha256);
+    engine::BroadcastReport broadcast = live.broadcast_report();
     // The result travels once, to the hub, for the user.
     std::filesystem::path fetched = job_dir(id) / "output.ply.zst";
     protocol::HttpOptions http;

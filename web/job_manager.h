@@ -27,7 +27,7 @@ struct JobRequest {
   std::string workflow_id;         // when run from the repository
   std::filesystem::path upload;    // the uploaded mesh (any format), or empty
   std::string input_url;           // else the hub fetches this (else the workflow's <input>)
-  std::string transfer = "smaller";  // "output": always the whole mesh (engine::TransferMode)
+  std::string transfer;            // "smaller" or "output" (always the whole mesh); "": the hub's default
 };
 
 class JobManager {
@@ -46,6 +46,8 @@ class JobManager {
   }
   // The bound on each while loop's iterations (a job past it fails with a clear error).
   void set_max_loop_iterations(int bound) { max_loop_iterations_ = bound; }
+  // What jobs that do not say use: "smaller" (the protocol) or "output" (whole meshes).
+  void set_default_transfer(std::string mode) { default_transfer_ = std::move(mode); }
 
   // Validates the workflow (XSD + operations) and the input: an uploaded mesh is read and
   // canonicalised to DATA/jobs/ID/input.ply.zst now; an input URL is checked now (http(s),
@@ -73,6 +75,7 @@ class JobManager {
   bool allow_private_fetch_ = false;
   std::uint64_t max_fetch_bytes_ = 8ull << 30;
   int max_loop_iterations_ = 100;
+  std::string default_transfer_ = "smaller";
   engine::JobJournal journal_;
   mutable std::mutex mutex_;
   std::condition_variable wake_;
