@@ -93,6 +93,7 @@ HttpNodeClient::HttpNodeClient(HttpNodeOptions options, std::string input_url, s
       current_url_(std::move(input_url)), current_sha_(std::move(input_sha256)) {}
 
 HttpNodeClient::~HttpNodeClient() {
+  stop_broadcast_ = true;  // a job that ends early does not wait for the last downloads
   if (broadcaster_.joinable()) broadcaster_.join();
 }
 
@@ -137,6 +138,7 @@ void HttpNodeClient::broadcast() {
 
 void HttpNodeClient::run_broadcast(std::vector<std::string> targets) {
   auto start = Clock::now();
+  auto stop = [this] { return stop_broadcast_.load() || (options_.cancelled && options_.cancelled()); };
   protocol::HttpOptions http;
   http.timeout = kNoticeTimeout;
   http.bearer_token = options_.token;
@@ -159,7 +161,7 @@ void HttpNodeClient::run_broadcast(std::vector<std::string> targets) {
         told(node);
       }
       for (const auto& [node, url] : round) {
-        json entry = settled_cache_entry(node, input_sha_, url, http, std::chrono::minutes(30), options_.cancelled);
+        json entry = settled_cache_entry(node, input_sha_, url, http, std::chrono::minutes(30), stop);
         if (entry.value("state", "") == "ready") {
           sources.push_back(node + "/files/" + input_sha_ + ".ply.zst");
           std::uint64_t bytes = entry.value("bytes", std::uint64_t{0});

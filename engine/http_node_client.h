@@ -10,6 +10,7 @@
 // once they all have it. A node that fails mid-step is left out: its operations move to
 // another node offering them and the step runs again there.
 
+#include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
@@ -98,6 +99,7 @@ class HttpNodeClient : public NodeClient {
   std::string input_url_, input_sha_;
   // The broadcast, in its own thread.
   std::thread broadcaster_;
+  std::atomic<bool> stop_broadcast_{false};
   std::mutex broadcast_mutex_;
   std::condition_variable broadcast_changed_;
   std::vector<std::string> to_tell_;  // nodes whose download is not asked for yet
