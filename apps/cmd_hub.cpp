@@ -20,6 +20,8 @@ struct HubArgs {
   std::string data = "meshflow-data";
   int nodes = 2;
   bool allow_private_fetch = false;
+  int max_loop = 100;
+  std::string transfer = "smaller";
 };
 
 web::HubOptions hub_options(const HubArgs& args) {
@@ -28,6 +30,8 @@ web::HubOptions hub_options(const HubArgs& args) {
   options.port = args.port;
   options.data_dir = args.data;
   options.allow_private_fetch = args.allow_private_fetch;
+  options.max_loop_iterations = args.max_loop;
+  options.default_transfer = args.transfer;
   return options;
 }
 
@@ -86,6 +90,12 @@ void add_common(CLI::App* cmd, HubArgs& args) {
   cmd->add_option("--data", args.data, "Data directory");
   cmd->add_flag("--allow-private-fetch", args.allow_private_fetch,
                 "Let jobs fetch input_url from loopback and private addresses");
+  cmd->add_option("--max-loop", args.max_loop, "Bound on the iterations of each while loop of a job")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--transfer", args.transfer,
+                  "What later nodes receive after each step, for jobs that do not say: 'smaller' (the "
+                  "correction or the output, whichever is smaller) or 'output' (always the whole mesh)")
+      ->check(CLI::IsMember({"smaller", "output"}));
 }
 
 void add_hub_commands(CLI::App& app, int& exit_status) {

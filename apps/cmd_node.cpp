@@ -6,6 +6,7 @@
 #include "apps/signals.h"
 #include "mesh/errors.h"
 #include "services/node_server.h"
+#include "services/operation.h"
 
 namespace meshflow::apps {
 namespace {
@@ -17,6 +18,8 @@ struct NodeArgs {
   std::string advertise;
   std::string data = "meshflow-node-data";
   std::uint64_t capacity = 50'000'000;
+  std::vector<std::string> offer;
+  int answer_within_ms = 20'000;
 };
 
 std::string read_token(const std::string& path) {
@@ -43,6 +46,10 @@ int run_node(const NodeArgs& args) {
   options.data_dir = args.data;
   options.hub_url = args.hub;
   options.capacity_vertices = args.capacity;
+  for (const auto& name : args.offer) services::find_operation(name);  // unknown: exit 2
+  options.operations = args.offer;
+  if (args.answer_within_ms < 0) throw InvalidInput("--answer-within-ms must be >= 0");
+  options.answer_within = std::chrono::milliseconds(args.answer_within_ms);
   if (!args.token_file.empty()) options.token = read_token(args.token_file);
   if (!args.hub.empty() && options.token.empty())
     throw InvalidInput("--hub needs --token-file (the hub's DATA/node.token)");
@@ -66,6 +73,10 @@ void add_node_command(CLI::App& app, int& exit_status) {
   cmd->add_option("--advertise", args->advertise, "URL others reach this node at");
   cmd->add_option("--data", args->data, "Data directory (cache and files)");
   cmd->add_option("--capacity", args->capacity, "Largest mesh taken in memory, in vertices");
+  cmd->add_option("--offer", args->offer, "Offer only these operations (comma-separated; default: all)")
+      ->delimiter(',');
+  cmd->add_option("--answer-within-ms", args->answer_within_ms,
+                  "A /run still running after this answers 202 with a task URL to poll");
   cmd->callback([args, &exit_status] { exit_status = run_node(*args); });
 }
 

@@ -1,5 +1,7 @@
 #include "engine/http_node_client.h"
 
+#include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <nlohmann/json.hpp>
 #include <thread>
@@ -13,15 +15,73 @@ namespace {
 using nlohmann::json;
 using Clock = std::chrono::steady_clock;
 
-constexpr auto kPollEvery = std::chrono::milliseconds(20);
 constexpr auto kStepTimeout = std::chrono::hours(2);
 constexpr auto kUpdateTimeout = std::chrono::minutes(30);
+constexpr auto kCallTimeout = std::chrono::minutes(2);     // one /run answer (or its 202)
+constexpr auto kNoticeTimeout = std::chrono::seconds(30);  // one-way /download, /update
+// Polls start fast (loopback answers in a millisecond) and back off to this.
+constexpr auto kFirstPoll = std::chrono::milliseconds(1);
+constexpr auto kSlowestPoll = std::chrono::milliseconds(50);
+constexpr auto kSlowestTaskPoll = std::chrono::milliseconds(500);
 
-std::int64_t ms_since(Clock::time_point start) {
-  return std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - start).count();
+class Backoff {
+ public:
+  explicit Backoff(std::chrono::milliseconds slowest) : slowest_(slowest) {}
+  void wait() {
+    std::this_thread::sleep_for(next_);
+    next_ = std::min(next_ * 2, slowest_);
+  }
+
+ private:
+  std::chrono::milliseconds next_ = kFirstPoll;
+  std::chrono::milliseconds slowest_;
+};
+
+std::string url_encode(const std::string& text) {
+  static const char* hex = "0123456789ABCDEF";
+  std::string out;
+  for (unsigned char c : text) {
+    if (std::isalnum(c) || c == '-' || c == '_' || c == '.' || c == '~') {
+      out += static_cast<char>(c);
+    } else {
+      out += '%';
+      out += hex[c >> 4];
+      out += hex[c & 15];
+    }
+  }
+  return out;
+}
+
+// A node's cache entry for the mesh `sha` fetched from `url`, once it is no longer pending
+// (or the deadline passes).
+json settled_cache_entry(const std::string& node, const std::string& sha, const std::string& url,
+                         const protocol::HttpOptions& http, Clock::duration limit,
+                         const std::function<bool()>& cancelled) {
+  auto deadline = Clock::now() + limit;
+  Backoff backoff(kSlowestPoll);
+  std::string query = node + "/cache/" + sha + "?url=" + url_encode(url);
+  for (;;) {
+    protocol::HttpResult res = protocol::http_request("GET", query, {}, http);
+    if (res.status == 0) return json{{"state", "failed"}, {"error", res.describe()}};
+    json state = json::parse(res.body, nullptr, false);
+    if (!state.is_object()) state = json{{"state", "failed"}, {"error", res.describe()}};
+    if (state.value("state", "") != "pending") return state;
+    if (Clock::now() > deadline) return json{{"state", "failed"}, {"error", "timed out"}};
+    if (cancelled && cancelled()) throw std::runtime_error("cancelled");
+    backoff.wait();
+  }
 }
 
 }  // namespace
+
+const char* to_string(TransferMode mode) { return mode == TransferMode::Output ? "output" : "smaller"; }
+
+TransferMode transfer_mode_from_string(const std::string& text) {
+  if (text.empty() || text == "smaller") return TransferMode::Smaller;
+  if (text == "output") return TransferMode::Output;
+  throw InvalidInput("transfer must be 'smaller' (the correction or the output, whichever is smaller) or "
+                     "'output' (always the whole output), not '" + text + "'");
+}
 
 struct HttpNodeClient::Answer {
   std::string node;
@@ -29,95 +89,229 @@ struct HttpNodeClient::Answer {
 };
 
 HttpNodeClient::HttpNodeClient(HttpNodeOptions options, std::string input_url, std::string input_sha256)
-    : options_(std::move(options)), current_url_(std::move(input_url)), current_sha_(std::move(input_sha256)) {}
+    : options_(std::move(options)), input_url_(input_url), input_sha_(input_sha256),
+      current_url_(std::move(input_url)), current_sha_(std::move(input_sha256)) {}
 
-void HttpNodeClient::broadcast_input() {
+HttpNodeClient::~HttpNodeClient() {
+  stop_broadcast_ = true;  // a job that ends early does not wait for the last downloads
+  if (broadcaster_.joinable()) broadcaster_.join();
+}
+
+bool HttpNodeClient::is_dead(const std::string& node) const {
+  return std::find(dead_.begin(), dead_.end(), node) != dead_.end();
+}
+
+std::string HttpNodeClient::place(const std::string& operation) {
+  std::vector<NodeCandidate> candidates;
+  for (NodeCandidate c : options_.candidates(operation)) {
+    if (is_dead(c.url)) continue;
+    for (const auto& [op, node] : plan_)
+      if (node == c.url) ++c.planned_steps;
+    candidates.push_back(std::move(c));
+  }
+  std::optional<std::string> node = choose_node(candidates);
+  if (!node) throw IoError("no registered node offers " + operation + (dead_.empty() ? "" : " (or every one failed)"));
+  plan_[operation] = *node;
+  return *node;
+}
+
+void HttpNodeClient::plan(const std::vector<std::string>& operations) {
+  for (const auto& op : operations)
+    if (!plan_.count(op)) place(op);
+}
+
+std::vector<std::string> HttpNodeClient::nodes_taking_part() const {
+  std::vector<std::string> nodes;
+  for (const auto& [op, node] : plan_)
+    if (!is_dead(node) && std::find(nodes.begin(), nodes.end(), node) == nodes.end()) nodes.push_back(node);
+  return nodes;
+}
+
+void HttpNodeClient::broadcast() {
+  std::vector<std::string> targets = nodes_taking_part();  // in order of first use
+  {
+    std::lock_guard lock(broadcast_mutex_);
+    to_tell_ = targets;
+  }
+  broadcaster_ = std::thread([this, targets] { run_broadcast(targets); });
+}
+
+void HttpNodeClient::run_broadcast(std::vector<std::string> targets) {
+  auto start = Clock::now();
+  auto stop = [this] { return stop_broadcast_.load() || (options_.cancelled && options_.cancelled()); };
   protocol::HttpOptions http;
-  http.timeout = std::chrono::seconds(30);
+  http.timeout = kNoticeTimeout;
   http.bearer_token = options_.token;
-  std::string body = json{{"url", current_url_}, {"sha256", current_sha_}}.dump();
-  for (const auto& node : options_.nodes) protocol::http_request("POST", node + "/download", body, http);
+  auto told = [&](const std::string& node) {
+    std::lock_guard lock(broadcast_mutex_);
+    std::erase(to_tell_, node);
+    broadcast_changed_.notify_all();
+  };
+  try {
+    std::vector<std::string> sources{input_url_};  // URLs the input can be fetched from
+    std::size_t next = 0;
+    while (next < targets.size()) {
+      std::vector<std::pair<std::string, std::string>> round;  // node, where it fetches from
+      for (const auto& source : sources) {
+        if (next == targets.size()) break;
+        round.emplace_back(targets[next++], source);
+      }
+      for (const auto& [node, url] : round) {
+        protocol::http_request("POST", node + "/download", json{{"url", url}, {"sha256", input_sha_}}.dump(), http);
+        told(node);
+      }
+      for (const auto& [node, url] : round) {
+        json entry = settled_cache_entry(node, input_sha_, url, http, std::chrono::minutes(30), stop);
+        if (entry.value("state", "") == "ready") {
+          sources.push_back(node + "/files/" + input_sha_ + ".ply.zst");
+          std::uint64_t bytes = entry.value("bytes", std::uint64_t{0});
+          broadcast_.bytes = std::max(broadcast_.bytes, bytes);
+          broadcast_.nodes.push_back(node);
+          if (options_.measured && bytes > 0 && entry.value("how", "") == "download")
+            options_.measured(node, bytes, entry.value("fetch_ms", std::int64_t{0}));
+        } else if (url != input_url_) {
+          // The node it fetched from failed it: straight from the hub then (its /run would too).
+          protocol::http_request("POST", node + "/download", json{{"url", input_url_}, {"sha256", input_sha_}}.dump(),
+                                 http);
+        }
+      }
+    }
+  } catch (...) {
+    // Cancelled: nodes left out fetch their input themselves when a step needs it.
+  }
+  {
+    std::lock_guard lock(broadcast_mutex_);
+    to_tell_.clear();
+    broadcast_changed_.notify_all();
+  }
+  broadcast_.ms = std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - start).count();
+}
+
+void HttpNodeClient::wait_until_told(const std::string& node) {
+  std::unique_lock lock(broadcast_mutex_);
+  broadcast_changed_.wait(lock, [&] { return std::find(to_tell_.begin(), to_tell_.end(), node) == to_tell_.end(); });
+}
+
+BroadcastReport HttpNodeClient::broadcast_report() {
+  if (broadcaster_.joinable()) broadcaster_.join();
+  return broadcast_;
 }
 
 HttpNodeClient::Answer HttpNodeClient::run_on_some_node(const std::string& operation, const std::string& body) {
   for (;;) {
     if (options_.cancelled && options_.cancelled()) throw std::runtime_error("cancelled");
-    std::optional<std::string> node = options_.pick(operation, dead_);
-    if (!node) throw IoError("no registered node offers " + operation + " (or every one failed)");
+    auto planned = plan_.find(operation);
+    std::string node = planned != plan_.end() && !is_dead(planned->second) ? planned->second : place(operation);
     protocol::HttpOptions http;
-    http.timeout = std::chrono::minutes(2);
+    http.timeout = kCallTimeout;
     http.bearer_token = options_.token;
-    if (options_.load) options_.load(*node, +1);
-    protocol::HttpResult res = protocol::http_request("POST", *node + "/run/" + operation, body, http);
-    // A long run answers 202 with a task to poll.
-    auto deadline = Clock::now() + kStepTimeout;
-    while (res.status == 202) {
+    wait_until_told(node);  // else it would fetch the input itself, beside the broadcast
+    if (options_.on_start) options_.on_start(operation, node);
+    if (options_.load) options_.load(node, +1);
+    struct Unload {
+      const HttpNodeOptions& o;
+      const std::string& n;
+      ~Unload() {
+        if (o.load) o.load(n, -1);
+      }
+    } unload{options_, node};
+    protocol::HttpResult res = protocol::http_request("POST", node + "/run/" + operation, body, http);
+    // A long run answers 202 with a task to poll (DESIGN §4).
+    if (res.status == 202) {
       json accepted = json::parse(res.body, nullptr, false);
       std::string task = accepted.is_object() ? accepted.value("task", "") : "";
-      if (task.empty()) break;
-      std::this_thread::sleep_for(std::chrono::milliseconds(200));
-      protocol::HttpResult poll = protocol::http_request("GET", task, {}, http);
-      if (!poll.ok()) {
-        res = poll;
-        break;
+      if (task.empty()) throw IoError(node + " answered /run/" + operation + " with 202 but no task URL");
+      auto deadline = Clock::now() + kStepTimeout;
+      Backoff backoff(kSlowestTaskPoll);
+      for (;;) {
+        if (options_.cancelled && options_.cancelled()) {
+          protocol::http_request("DELETE", task, {}, http);  // the node stops the run if it can
+          throw std::runtime_error("cancelled");
+        }
+        backoff.wait();
+        protocol::HttpResult poll = protocol::http_request("GET", task, {}, http);
+        if (!poll.ok()) {
+          res = poll;
+          break;
+        }
+        json state = json::parse(poll.body, nullptr, false);
+        std::string s = state.is_object() ? state.value("state", "") : "";
+        if (s == "done") {
+          res = {200, state["result"].dump(), ""};
+          break;
+        }
+        if (s == "failed" || s == "cancelled") {
+          int status = state.value("status", 500);
+          res = {status, state.contains("error") ? state["error"].dump() : "", ""};
+          break;
+        }
+        if (Clock::now() > deadline) {
+          res = {0, "", "the task " + task + " did not finish in time"};
+          break;
+        }
       }
-      json state = json::parse(poll.body, nullptr, false);
-      std::string s = state.value("state", "");
-      if (s == "done") res = {200, state["result"].dump(), ""};
-      else if (s == "failed" || s == "cancelled") res = {500, state.value("error", json()).dump(), ""};
-      if (Clock::now() > deadline) res = {0, "", "step timed out"};
     }
-    if (options_.load) options_.load(*node, -1);
     if (res.ok()) {
       json answer = json::parse(res.body, nullptr, false);
-      if (!answer.is_object()) throw IoError(*node + " answered /run/" + operation + " with no JSON");
-      return {*node, answer};
+      if (!answer.is_object()) throw IoError(node + " answered /run/" + operation + " with no JSON");
+      return {node, answer};
     }
-    if (res.status >= 400 && res.status < 500)  // the request itself is wrong: no other node helps
-      throw InvalidInput(operation + " on " + *node + ": " + res.describe());
-    // Connection refused, reset, or a server error: try another node offering the operation.
-    dead_.push_back(*node);
+    // The request itself is wrong: no other node helps. (404: the node does not offer the
+    // operation, or lost the task in a restart: another node may.)
+    if (res.status >= 400 && res.status < 500 && res.status != 404)
+      throw InvalidInput(operation + " on " + node + ": " + res.describe());
+    // Connection refused or reset, a server error, a lost task: this node is out of the job,
+    // its operations move elsewhere and the step runs again.
+    dead_.push_back(node);
+    for (auto& [op, where] : plan_)
+      if (where == node) {
+        std::vector<NodeCandidate> any = options_.candidates(op);
+        bool other = std::any_of(any.begin(), any.end(), [&](const NodeCandidate& c) { return !is_dead(c.url); });
+        if (other) place(op);
+      }
   }
 }
 
-std::int64_t HttpNodeClient::forward(const std::string& from_node, const std::string& base_sha,
-                                     const Answer& answer, StepReport& report) {
-  auto start = Clock::now();
+void HttpNodeClient::forward(const std::string& from_node, const std::string& base_sha, const Answer& answer,
+                             StepReport& report) {
+  std::vector<std::string> targets;
+  for (const auto& op : later_) {
+    auto it = plan_.find(op);
+    if (it == plan_.end()) continue;
+    const std::string& node = it->second;
+    if (node == from_node || is_dead(node) || std::find(targets.begin(), targets.end(), node) != targets.end())
+      continue;
+    targets.push_back(node);
+  }
+  if (targets.empty()) return;
   std::string output = answer.body.value("output", "");
   std::string correction = answer.body.value("correction", "");
   std::string sha = answer.body.value("sha256", "");
-  bool send_correction = report.correction_bytes > 0 && report.correction_bytes < report.output_bytes;
+  if (sha == base_sha) return;  // the step changed nothing: later nodes have (or are fetching) it
+  bool send_correction = options_.transfer == TransferMode::Smaller && report.correction_bytes > 0 &&
+                         report.correction_bytes < report.output_bytes;
   report.sent = send_correction ? "correction" : "output";
   protocol::HttpOptions http;
-  http.timeout = std::chrono::seconds(30);
+  http.timeout = kNoticeTimeout;
   http.bearer_token = options_.token;
+  json body = send_correction
+                  ? json{{"base", base_sha}, {"correction", correction}, {"result", output}, {"result_sha256", sha}}
+                  : json{{"url", output}, {"sha256", sha}};
   std::vector<std::string> told;
-  for (const auto& node : options_.nodes) {
-    if (node == from_node || std::find(dead_.begin(), dead_.end(), node) != dead_.end()) continue;
-    json body = send_correction
-                    ? json{{"base", base_sha}, {"correction", correction}, {"result", output}, {"result_sha256", sha}}
-                    : json{{"url", output}, {"sha256", sha}};
+  for (const auto& node : targets) wait_until_told(node);  // an update needs its base coming
+  for (const auto& node : targets)
     if (protocol::http_request("POST", node + (send_correction ? "/update" : "/download"), body.dump(), http).ok())
       told.push_back(node);
-  }
-  // The next step starts once every node has the result (thesis §4.2): wait and collect how
-  // long each took to apply it.
-  std::int64_t slowest = 0;
+  // The next step starts once every later node has the result (thesis §4.2).
   for (const auto& node : told) {
-    auto deadline = Clock::now() + kUpdateTimeout;
-    while (Clock::now() < deadline) {
-      protocol::HttpResult res = protocol::http_request("GET", node + "/cache/" + sha, {}, http);
-      json state = json::parse(res.body, nullptr, false);
-      std::string s = state.is_object() ? state.value("state", "") : "";
-      if (s == "ready" || s == "failed" || res.status == 0) {
-        if (s == "ready") slowest = std::max<std::int64_t>(slowest, state.value("ms", 0));
-        break;
-      }
-      std::this_thread::sleep_for(kPollEvery);
-    }
+    json entry = settled_cache_entry(node, sha, output, http, kUpdateTimeout, options_.cancelled);
+    if (entry.value("state", "") != "ready") continue;  // its /run will fetch the output itself
+    std::int64_t fetch_ms = entry.value("fetch_ms", std::int64_t{0});
+    std::uint64_t bytes = entry.value("bytes", std::uint64_t{0});
+    report.transfer_ms = std::max(report.transfer_ms, fetch_ms);
+    report.update_ms = std::max(report.update_ms, entry.value("apply_ms", std::int64_t{0}));
+    if (options_.measured && bytes > 0) options_.measured(node, bytes, fetch_ms);
   }
-  report.update_ms = slowest;
-  return ms_since(start);
 }
 
 StepReport HttpNodeClient::run_atomic(const std::string& operation, const services::Params& params) {
@@ -130,12 +324,14 @@ StepReport HttpNodeClient::run_atomic(const std::string& operation, const servic
   report.operation = operation;
   report.node = answer.node;
   report.run_ms = answer.body.value("run_ms", std::int64_t{0});
+  report.wait_ms = answer.body.value("wait_ms", std::int64_t{0});
   report.output_bytes = answer.body.value("output_bytes", std::uint64_t{0});
   report.correction_bytes = answer.body.value("correction_bytes", std::uint64_t{0});
   std::string base = current_sha_;
-  report.transfer_ms = forward(answer.node, base, answer, report);
+  forward(answer.node, base, answer, report);
   current_url_ = answer.body.value("output", "");
   current_sha_ = answer.body.value("sha256", "");
+  current_node_ = answer.node;
   return report;
 }
 
@@ -148,6 +344,7 @@ StepReport HttpNodeClient::run_analysis(const std::string& operation) {
   report.is_analysis = true;
   report.value = answer.body.value("value", 0.0);
   report.run_ms = answer.body.value("run_ms", std::int64_t{0});
+  report.wait_ms = answer.body.value("wait_ms", std::int64_t{0});
   return report;
 }
 

@@ -67,13 +67,32 @@ PRAGMA synchronous=NORMAL;
 CREATE TABLE IF NOT EXISTS jobs (
   id TEXT PRIMARY KEY, state TEXT NOT NULL, workflow_xml TEXT NOT NULL, workflow_id TEXT,
   input_path TEXT, input_sha256 TEXT, output_path TEXT, output_sha256 TEXT, error TEXT,
-  created TEXT NOT NULL);
+  created TEXT NOT NULL, input_url TEXT, transfer TEXT, broadcast_ms INTEGER,
+  broadcast_bytes INTEGER, elapsed_ms INTEGER);
 CREATE TABLE IF NOT EXISTS steps (
   job_id TEXT NOT NULL, seq INTEGER NOT NULL, operation TEXT, kind TEXT, node TEXT, state TEXT,
   run_ms INTEGER, transfer_ms INTEGER, update_ms INTEGER, sent TEXT, correction_bytes INTEGER,
   output_bytes INTEGER, value REAL, output_sha256 TEXT, output_url TEXT, correction_url TEXT,
-  error TEXT, PRIMARY KEY (job_id, seq));
+  error TEXT, wait_ms INTEGER, PRIMARY KEY (job_id, seq));
 )sql";
+
+// Columns added after the first release: added to an older journal when it is opened.
+const char* kAddedColumns[][2] = {
+    {"jobs", "input_url TEXT"},         {"jobs", "transfer TEXT"},
+    {"jobs", "broadcast_ms INTEGER"},   {"jobs", "broadcast_bytes INTEGER"},
+    {"jobs", "elapsed_ms INTEGER"},     {"steps", "wait_ms INTEGER"},
+};
+
+bool has_column(sqlite3* db, const std::string& table, const std::string& column) {
+  sqlite3_stmt* stmt = nullptr;
+  std::string sql = "PRAGMA table_info(" + table + ")";
+  sqlite3_prepare_v2(db, sql.c_str(), -1, &stmt, nullptr);
+  bool found = false;
+  while (sqlite3_step(stmt) == SQLITE_ROW)
+    if (reinterpret_cast<const char*>(sqlite3_column_text(stmt, 1)) == column) found = true;
+  sqlite3_finalize(stmt);
+  return found;
+}
 
 }  // namespace
 
@@ -106,6 +125,13 @@ JobJournal::JobJournal(const std::filesystem::path& file) {
     sqlite3_free(error);
     throw IoError("job journal " + file.string() + ": " + message);
   }
+  for (const auto& [table, definition] : kAddedColumns) {
+    std::string column = std::string(definition).substr(0, std::string(definition).find(' '));
+    if (has_column(db_, table, column)) continue;
+    std::string sql = std::string("ALTER TABLE ") + table + " ADD COLUMN " + definition;
+    if (sqlite3_exec(db_, sql.c_str(), nullptr, nullptr, nullptr) != SQLITE_OK)
+      throw IoError("job journal " + file.string() + ": " + sqlite3_errmsg(db_));
+  }
 }
 
 JobJournal::~JobJournal() { sqlite3_close(db_); }
@@ -113,7 +139,7 @@ JobJournal::~JobJournal() { sqlite3_close(db_); }
 void JobJournal::create(const JobRecord& job) {
   std::lock_guard lock(mutex_);
   Statement(db_, "INSERT INTO jobs (id, state, workflow_xml, workflow_id, input_path, input_sha256,"
-                 " created) VALUES (?,?,?,?,?,?,?)")
+                 " created, input_url, transfer) VALUES (?,?,?,?,?,?,?,?,?)")
       .text(1, job.id)
       .text(2, to_string(job.state))
       .text(3, job.workflow_xml)
@@ -121,6 +147,8 @@ void JobJournal::create(const JobRecord& job) {
       .text(5, job.input_path)
       .text(6, job.input_sha256)
       .text(7, job.created.empty() ? now_iso8601() : job.created)
+      .text(8, job.input_url)
+      .text(9, job.transfer)
       .step();
 }
 
@@ -153,9 +181,22 @@ void JobJournal::set_output(const std::string& id, const std::string& path,
       .step();
 }
 
+void JobJournal::set_timings(const std::string& id, std::int64_t broadcast_ms, std::uint64_t broadcast_bytes,
+                             std::int64_t elapsed_ms) {
+  std::lock_guard lock(mutex_);
+  Statement(db_, "UPDATE jobs SET broadcast_ms = ?, broadcast_bytes = ?, elapsed_ms = ? WHERE id = ?")
+      .integer(1, broadcast_ms)
+      .integer(2, static_cast<std::int64_t>(broadcast_bytes))
+      .integer(3, elapsed_ms)
+      .text(4, id)
+      .step();
+}
+
 void JobJournal::put_step(const std::string& id, const StepRecord& s) {
   std::lock_guard lock(mutex_);
-  Statement(db_, "INSERT OR REPLACE INTO steps VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)")
+  Statement(db_, "INSERT OR REPLACE INTO steps (job_id, seq, operation, kind, node, state, run_ms,"
+                 " transfer_ms, update_ms, sent, correction_bytes, output_bytes, value, output_sha256,"
+                 " output_url, correction_url, error, wait_ms) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)")
       .text(1, id)
       .integer(2, s.seq)
       .text(3, s.operation)
@@ -173,13 +214,15 @@ void JobJournal::put_step(const std::string& id, const StepRecord& s) {
       .text(15, s.output_url)
       .text(16, s.correction_url)
       .text(17, s.error)
+      .integer(18, s.wait_ms)
       .step();
 }
 
 std::optional<JobRecord> JobJournal::get(const std::string& id) const {
   std::lock_guard lock(mutex_);
   Statement job(db_, "SELECT id, state, workflow_xml, workflow_id, input_path, input_sha256,"
-                     " output_path, output_sha256, error, created FROM jobs WHERE id = ?");
+                     " output_path, output_sha256, error, created, input_url, transfer, broadcast_ms,"
+                     " broadcast_bytes, elapsed_ms FROM jobs WHERE id = ?");
   job.text(1, id);
   if (!job.step()) return std::nullopt;
   JobRecord r;
@@ -193,9 +236,14 @@ std::optional<JobRecord> JobJournal::get(const std::string& id) const {
   r.output_sha256 = job.column_text(7);
   r.error = job.column_text(8);
   r.created = job.column_text(9);
+  r.input_url = job.column_text(10);
+  r.transfer = job.column_text(11).empty() ? "smaller" : job.column_text(11);
+  r.broadcast_ms = job.column_int(12);
+  r.broadcast_bytes = static_cast<std::uint64_t>(job.column_int(13));
+  r.elapsed_ms = job.column_int(14);
   Statement steps(db_, "SELECT seq, operation, kind, node, state, run_ms, transfer_ms, update_ms,"
                        " sent, correction_bytes, output_bytes, value, output_sha256, output_url,"
-                       " correction_url, error FROM steps WHERE job_id = ? ORDER BY seq");
+                       " correction_url, error, wait_ms FROM steps WHERE job_id = ? ORDER BY seq");
   steps.text(1, id);
   while (steps.step()) {
     StepRecord s;
@@ -215,6 +263,7 @@ std::optional<JobRecord> JobJournal::get(const std::string& id) const {
     s.output_url = steps.column_text(13);
     s.correction_url = steps.column_text(14);
     s.error = steps.column_text(15);
+    s.wait_ms = steps.column_int(16);
     r.steps.push_back(std::move(s));
   }
   return r;

@@ -25,6 +25,7 @@ struct StepRecord {
   std::string node;               // base URL, or "in-process"
   std::string state;              // "running", "done", "failed"
   std::int64_t run_ms = 0;
+  std::int64_t wait_ms = 0;       // the node waiting for its input before running
   std::int64_t transfer_ms = 0;   // forwarding the result to later nodes
   std::int64_t update_ms = 0;     // applying corrections on later nodes
   std::string sent;               // "correction" or "output" (what later nodes received)
@@ -42,8 +43,13 @@ struct JobRecord {
   JobState state = JobState::Queued;
   std::string workflow_xml;
   std::string workflow_id;        // when run from the repository
-  std::string input_path;         // the hub's canonical copy of the input
+  std::string input_path;         // the hub's canonical copy of the input ("" until fetched)
   std::string input_sha256;
+  std::string input_url;          // where the hub fetches the input from, when not uploaded
+  std::string transfer = "smaller";  // engine::TransferMode: "smaller" or "output"
+  std::int64_t broadcast_ms = 0;  // the input broadcast (slowest node)
+  std::uint64_t broadcast_bytes = 0;
+  std::int64_t elapsed_ms = 0;    // wall time of the run, first step to output on the hub
   std::string output_path;        // the hub's copy of the result, when done
   std::string output_sha256;
   std::string error;
@@ -62,6 +68,8 @@ class JobJournal {
   void set_state(const std::string& id, JobState state, const std::string& error = {});
   void set_input(const std::string& id, const std::string& path, const std::string& sha256);
   void set_output(const std::string& id, const std::string& path, const std::string& sha256);
+  void set_timings(const std::string& id, std::int64_t broadcast_ms, std::uint64_t broadcast_bytes,
+                   std::int64_t elapsed_ms);
   void put_step(const std::string& id, const StepRecord& step);  // insert or replace by seq
   std::optional<JobRecord> get(const std::string& id) const;
   std::vector<std::string> unfinished() const;  // queued or running: to resume after a restart

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "services/operation.h"
 
@@ -13,10 +14,11 @@ namespace meshflow::engine {
 struct StepReport {
   std::string operation;
   std::string node = "in-process";
-  std::int64_t run_ms = 0;
-  std::int64_t transfer_ms = 0;   // forwarding the result to the other nodes
-  std::int64_t update_ms = 0;     // the other nodes applying it
-  std::string sent;               // "correction" or "output" ("" when nothing was forwarded)
+  std::int64_t run_ms = 0;         // the operation itself, on the node
+  std::int64_t wait_ms = 0;        // the node waiting for (or fetching) its input first
+  std::int64_t transfer_ms = 0;    // later nodes fetching the result (the slowest of them)
+  std::int64_t update_ms = 0;      // later nodes applying it (the slowest of them)
+  std::string sent;                // "correction" or "output" ("" when no later node needed it)
   std::uint64_t correction_bytes = 0;
   std::uint64_t output_bytes = 0;
   bool is_analysis = false;
@@ -30,6 +32,9 @@ class NodeClient {
   virtual StepReport run_atomic(const std::string& operation, const services::Params& params) = 0;
   // Evaluates an analysis operation on the current mesh.
   virtual StepReport run_analysis(const std::string& operation) = 0;
+  // Before each step: the operations that may still run after it (from the executor's list of
+  // active tasks), so that a step's result goes only to the nodes that will need it (DESIGN §6).
+  virtual void expect_later(const std::vector<std::string>& operations) {}
 };
 
 }  // namespace meshflow::engine

@@ -52,6 +52,10 @@ std::string trim(const std::string& s) {
 }
 
 // Builds the model while the validating parser reads; the first error stops everything.
+// Xerces reports some validation errors only at an element's end, so the handler may first
+// see elements where the schema allows none (an <atomic> inside a <name>...): it owns the
+// tasks being built on its own stack, never points into a vector that may grow, and ignores
+// what does not fit; the document is refused anyway.
 class Builder : public DefaultHandler {
  public:
   explicit Builder(std::string name) : name_(std::move(name)) {}
@@ -64,24 +68,21 @@ class Builder : public DefaultHandler {
     Location here = where();
     text_.clear();
     if (tag == "atomic" || tag == "if" || tag == "while") {
-      Task task;
-      task.kind = tag == "atomic" ? Task::Kind::Atomic : tag == "if" ? Task::Kind::If : Task::Kind::While;
-      task.at = here;
-      current_body().push_back(std::move(task));
-      open_.push_back(&current_body().back());
-      // Bodies nest inside the task just opened.
-    } else if (tag == "body") {
-      bodies_.push_back(open_.empty() ? &workflow_.body : &open_.back()->body);
-    } else if (tag == "else") {
-      bodies_.push_back(&open_.back()->else_body);
+      Open task;
+      task.task.kind = tag == "atomic" ? Task::Kind::Atomic : tag == "if" ? Task::Kind::If : Task::Kind::While;
+      task.task.at = here;
+      task.depth = stack_.size();
+      open_.push_back(std::move(task));
+    } else if (tag == "body" || tag == "else") {
+      if (!open_.empty()) open_.back().in_else = tag == "else";
     } else if (tag == "condition") {
-      open_.back()->condition.at = here;
+      if (!open_.empty()) open_.back().task.condition.at = here;
     } else if (tag == "parameter") {
       Parameter p;
       p.at = here;
       const XMLCh* name = attributes.getValue(u"name");
       if (name) p.name = trim(narrow(name));
-      open_.back()->parameters.push_back(std::move(p));
+      if (!open_.empty()) open_.back().task.parameters.push_back(std::move(p));
     }
     stack_.push_back(tag);
   }
@@ -95,24 +96,31 @@ class Builder : public DefaultHandler {
     std::string tag = narrow(local);
     std::string value = trim(text_);
     text_.clear();
+    if (stack_.empty()) return;
     stack_.pop_back();
     std::string parent = stack_.empty() ? "" : stack_.back();
-    if (tag == "atomic" || tag == "if" || tag == "while") {
+    Task* task = open_.empty() ? nullptr : &open_.back().task;
+    if ((tag == "atomic" || tag == "if" || tag == "while") && !open_.empty() &&
+        open_.back().depth == stack_.size()) {
+      Task done = std::move(open_.back().task);
       open_.pop_back();
-    } else if (tag == "body" || tag == "else") {
-      bodies_.pop_back();
+      Body& into = open_.empty() ? workflow_.body
+                                 : open_.back().in_else ? open_.back().task.else_body : open_.back().task.body;
+      into.push_back(std::move(done));
     } else if (tag == "input") {
       workflow_.input_url = value;
+    } else if (!task) {
+      return;
     } else if (tag == "name" && parent == "atomic") {
-      open_.back()->name = value;
+      task->name = value;
     } else if (tag == "name" && parent == "analysis") {
-      open_.back()->condition.analysis = value;
+      task->condition.analysis = value;
     } else if (tag == "operator") {
-      open_.back()->condition.op = value;
+      task->condition.op = value;
     } else if (tag == "value") {
-      open_.back()->condition.value = value;
-    } else if (tag == "parameter") {
-      open_.back()->parameters.back().value = value;
+      task->condition.value = value;
+    } else if (tag == "parameter" && !task->parameters.empty()) {
+      task->parameters.back().value = value;
     }
   }
 
@@ -123,7 +131,6 @@ class Builder : public DefaultHandler {
   Workflow take() { return std::move(workflow_); }
 
  private:
-  Body& current_body() { return *bodies_.back(); }
   Location where() const {
     if (!locator_) return {};
     return {static_cast<int>(locator_->getLineNumber()), static_cast<int>(locator_->getColumnNumber())};
@@ -134,11 +141,17 @@ class Builder : public DefaultHandler {
                      narrow(e.getMessage()));
   }
 
+  // A task element not closed yet, and whether its <else> is the body being read.
+  struct Open {
+    Task task;
+    std::size_t depth = 0;  // elements enclosing it
+    bool in_else = false;
+  };
+
   std::string name_;
   const Locator* locator_ = nullptr;
   Workflow workflow_;
-  std::vector<Body*> bodies_;
-  std::vector<Task*> open_;
+  std::vector<Open> open_;
   std::vector<std::string> stack_;
   std::string text_;
 };

@@ -1,8 +1,13 @@
 #include "protocol/http_client.h"
 
+#include <arpa/inet.h>
 #include <curl/curl.h>
+#include <netdb.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
 #include <zstd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -28,6 +33,54 @@ struct CurlHandle {
   }
 };
 
+bool is_public_v4(std::uint32_t a) {  // host byte order
+  auto in = [a](std::uint32_t net, int bits) { return (a >> (32 - bits)) == (net >> (32 - bits)); };
+  return !(in(0x00000000, 8) ||    // "this" network
+           in(0x0A000000, 8) ||    // 10/8
+           in(0x64400000, 10) ||   // 100.64/10 carrier-grade NAT
+           in(0x7F000000, 8) ||    // loopback
+           in(0xA9FE0000, 16) ||   // link-local (cloud metadata lives here)
+           in(0xAC100000, 12) ||   // 172.16/12
+           in(0xC0000000, 24) ||   // 192.0.0/24 protocol assignments
+           in(0xC0000200, 24) ||   // TEST-NET-1
+           in(0xC0A80000, 16) ||   // 192.168/16
+           in(0xC6120000, 15) ||   // 198.18/15 benchmarking
+           in(0xC6336400, 24) ||   // TEST-NET-2
+           in(0xCB007100, 24) ||   // TEST-NET-3
+           in(0xE0000000, 4) ||    // multicast
+           in(0xF0000000, 4));     // reserved and broadcast
+}
+
+bool is_public_v6(const unsigned char* b) {
+  static const unsigned char mapped[12] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0xff, 0xff};
+  static const unsigned char nat64[12] = {0, 0x64, 0xff, 0x9b, 0, 0, 0, 0, 0, 0, 0, 0};
+  auto v4 = [b] { return std::uint32_t(b[12]) << 24 | std::uint32_t(b[13]) << 16 | std::uint32_t(b[14]) << 8 | b[15]; };
+  if (std::equal(mapped, mapped + 12, b) || std::equal(nat64, nat64 + 12, b)) return is_public_v4(v4());
+  bool zero_prefix = std::all_of(b, b + 15, [](unsigned char c) { return c == 0; });
+  if (zero_prefix && (b[15] == 0 || b[15] == 1)) return false;  // :: and ::1
+  if (std::all_of(b, b + 12, [](unsigned char c) { return c == 0; })) return false;  // IPv4-compatible
+  if ((b[0] & 0xfe) == 0xfc) return false;                   // fc00::/7 unique local
+  if (b[0] == 0xfe && (b[1] & 0xc0) == 0x80) return false;   // fe80::/10 link-local
+  if (b[0] == 0xfe && (b[1] & 0xc0) == 0xc0) return false;   // fec0::/10 site-local
+  if (b[0] == 0xff) return false;                            // multicast
+  if (b[0] == 0x20 && b[1] == 0x01 && b[2] == 0x0d && b[3] == 0xb8) return false;  // documentation
+  return true;
+}
+
+bool is_public_sockaddr(const sockaddr* address) {
+  if (address->sa_family == AF_INET)
+    return is_public_v4(ntohl(reinterpret_cast<const sockaddr_in*>(address)->sin_addr.s_addr));
+  if (address->sa_family == AF_INET6)
+    return is_public_v6(reinterpret_cast<const sockaddr_in6*>(address)->sin6_addr.s6_addr);
+  return false;
+}
+
+// libcurl asks this for every socket it opens (redirects and DNS answers included).
+curl_socket_t open_public_socket(void*, curlsocktype purpose, curl_sockaddr* address) {
+  if (purpose != CURLSOCKTYPE_IPCXN || !is_public_sockaddr(&address->addr)) return CURL_SOCKET_BAD;
+  return socket(address->family, address->socktype, address->protocol);
+}
+
 void common_options(CurlHandle& h, const std::string& url, const HttpOptions& options) {
   curl_easy_setopt(h.curl, CURLOPT_URL, url.c_str());
   curl_easy_setopt(h.curl, CURLOPT_NOSIGNAL, 1L);
@@ -36,6 +89,14 @@ void common_options(CurlHandle& h, const std::string& url, const HttpOptions& op
                    static_cast<long>(options.connect_timeout.count()));
   curl_easy_setopt(h.curl, CURLOPT_BUFFERSIZE, 512L * 1024L);
   curl_easy_setopt(h.curl, CURLOPT_PROTOCOLS_STR, "http,https");
+  if (options.public_only) curl_easy_setopt(h.curl, CURLOPT_OPENSOCKETFUNCTION, open_public_socket);
+  if (options.follow_redirects) {
+    curl_easy_setopt(h.curl, CURLOPT_FOLLOWLOCATION, 1L);
+    curl_easy_setopt(h.curl, CURLOPT_MAXREDIRS, 5L);
+    curl_easy_setopt(h.curl, CURLOPT_REDIR_PROTOCOLS_STR, "http,https");
+  }
+  if (options.max_bytes > 0)
+    curl_easy_setopt(h.curl, CURLOPT_MAXFILESIZE_LARGE, static_cast<curl_off_t>(options.max_bytes));
   if (!options.bearer_token.empty()) {
     std::string auth = "Authorization: Bearer " + options.bearer_token;
     h.headers = curl_slist_append(h.headers, auth.c_str());
@@ -66,6 +127,8 @@ struct DownloadSink {
   ZSTD_DStream* zstd = nullptr;
   std::vector<char> out_buffer;
   std::uint64_t bytes = 0;
+  std::uint64_t max_bytes = 0;  // 0: no limit
+  bool too_big = false;
   bool failed = false;
   std::string error_body;  // kept for non-2xx answers
 };
@@ -74,6 +137,10 @@ size_t write_download(char* data, size_t size, size_t count, void* user) {
   auto* sink = static_cast<DownloadSink*>(user);
   size_t n = size * count;
   sink->bytes += n;
+  if (sink->max_bytes > 0 && sink->bytes > sink->max_bytes) {
+    sink->too_big = true;
+    return 0;
+  }
   if (std::fwrite(data, 1, n, sink->file) != n) return 0;
   if (sink->error_body.size() < 4096) sink->error_body.append(data, std::min<size_t>(n, 4096));
   if (!sink->zstd) {
@@ -123,6 +190,32 @@ HttpResult http_request(const std::string& method, const std::string& url,
   return result;
 }
 
+HttpResult http_post_form(const std::string& url, const std::vector<FormPart>& parts,
+                          const HttpOptions& options) {
+  init_curl_once();
+  CurlHandle h;
+  if (!h.curl) return {0, {}, "cannot create a libcurl handle"};
+  common_options(h, url, options);
+  std::unique_ptr<curl_mime, decltype(&curl_mime_free)> mime(curl_mime_init(h.curl), curl_mime_free);
+  for (const auto& part : parts) {
+    curl_mimepart* field = curl_mime_addpart(mime.get());
+    curl_mime_name(field, part.name.c_str());
+    if (part.file_path.empty()) {
+      curl_mime_data(field, part.value.data(), part.value.size());
+    } else if (curl_mime_filedata(field, part.file_path.c_str()) != CURLE_OK) {
+      return {0, {}, "cannot read " + part.file_path};
+    }
+  }
+  std::string response;
+  curl_easy_setopt(h.curl, CURLOPT_MIMEPOST, mime.get());
+  curl_easy_setopt(h.curl, CURLOPT_HTTPHEADER, h.headers);
+  curl_easy_setopt(h.curl, CURLOPT_WRITEFUNCTION, append_to_string);
+  curl_easy_setopt(h.curl, CURLOPT_WRITEDATA, &response);
+  HttpResult result = finish(h, curl_easy_perform(h.curl));
+  result.body = std::move(response);
+  return result;
+}
+
 DownloadResult http_download(const std::string& url, const std::string& path,
                              const std::optional<std::string>& expected_sha256,
                              bool decompress_zstd, const HttpOptions& options) {
@@ -141,6 +234,7 @@ DownloadResult http_download(const std::string& url, const std::string& path,
     sink.zstd = zstd.get();
     sink.out_buffer.resize(ZSTD_DStreamOutSize());
   }
+  sink.max_bytes = options.max_bytes;
   CurlHandle h;
   common_options(h, url, options);
   curl_easy_setopt(h.curl, CURLOPT_HTTPHEADER, h.headers);
@@ -148,6 +242,10 @@ DownloadResult http_download(const std::string& url, const std::string& path,
   curl_easy_setopt(h.curl, CURLOPT_WRITEDATA, &sink);
   HttpResult http = finish(h, curl_easy_perform(h.curl));
   bool closed = std::fclose(sink.file) == 0;
+  if (sink.too_big || (http.status == 0 && http.error == curl_easy_strerror(CURLE_FILESIZE_EXCEEDED)))
+    http = {0, {}, url + " is larger than the limit of " + std::to_string(options.max_bytes) + " bytes"};
+  else if (http.status == 0 && options.public_only && http.error == curl_easy_strerror(CURLE_COULDNT_CONNECT))
+    http.error += " (only public addresses are fetched: loopback and private ranges are refused)";
   static_cast<HttpResult&>(result) = http;
   result.bytes = sink.bytes;
   std::error_code ignored;
@@ -170,6 +268,47 @@ DownloadResult http_download(const std::string& url, const std::string& path,
   }
   std::filesystem::rename(tmp, path);
   return result;
+}
+
+bool is_public_address(const std::string& ip) {
+  in_addr v4{};
+  if (inet_pton(AF_INET, ip.c_str(), &v4) == 1) return is_public_v4(ntohl(v4.s_addr));
+  in6_addr v6{};
+  if (inet_pton(AF_INET6, ip.c_str(), &v6) == 1) return is_public_v6(v6.s6_addr);
+  return false;
+}
+
+std::string why_not_public(const std::string& url) {
+  init_curl_once();
+  CURLU* parsed = curl_url();
+  std::unique_ptr<CURLU, decltype(&curl_url_cleanup)> guard(parsed, curl_url_cleanup);
+  if (curl_url_set(parsed, CURLUPART_URL, url.c_str(), 0) != CURLUE_OK) return "not a URL: " + url;
+  char* scheme = nullptr;
+  char* host = nullptr;
+  curl_url_get(parsed, CURLUPART_SCHEME, &scheme, 0);
+  curl_url_get(parsed, CURLUPART_HOST, &host, 0);
+  std::string scheme_text = scheme ? scheme : "", host_text = host ? host : "";
+  curl_free(scheme);
+  curl_free(host);
+  if (scheme_text != "http" && scheme_text != "https") return "only http and https URLs are fetched, not " + url;
+  if (host_text.size() > 2 && host_text.front() == '[') host_text = host_text.substr(1, host_text.size() - 2);
+  addrinfo hints{};
+  hints.ai_socktype = SOCK_STREAM;
+  addrinfo* found = nullptr;
+  if (getaddrinfo(host_text.c_str(), nullptr, &hints, &found) != 0 || !found)
+    return "cannot resolve the host " + host_text;
+  std::string why;
+  for (addrinfo* a = found; a && why.empty(); a = a->ai_next) {
+    if (is_public_sockaddr(a->ai_addr)) continue;
+    char text[INET6_ADDRSTRLEN] = "?";
+    const void* raw = a->ai_family == AF_INET
+                          ? static_cast<const void*>(&reinterpret_cast<sockaddr_in*>(a->ai_addr)->sin_addr)
+                          : static_cast<const void*>(&reinterpret_cast<sockaddr_in6*>(a->ai_addr)->sin6_addr);
+    inet_ntop(a->ai_family, raw, text, sizeof text);
+    why = host_text + " resolves to " + text + ", a loopback or private address";
+  }
+  freeaddrinfo(found);
+  return why;
 }
 
 std::string url_origin(const std::string& url) {

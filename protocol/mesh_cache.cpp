@@ -127,7 +127,8 @@ void MeshCache::download(const std::string& url, const std::optional<std::string
     CacheEntry alias = entries_.at(url_of_sha_.at(*sha256));
     alias.url = url;
     alias.how = "local";
-    alias.ms = 0;
+    alias.ms = alias.fetch_ms = alias.apply_ms = 0;
+    alias.bytes = 0;
     entries_[url] = alias;
     return;
   }
@@ -147,7 +148,8 @@ void MeshCache::update(const std::string& base_sha256, const std::string& correc
     CacheEntry alias = entries_.at(url_of_sha_.at(result_sha256));
     alias.url = result_url;
     alias.how = "local";
-    alias.ms = 0;
+    alias.ms = alias.fetch_ms = alias.apply_ms = 0;
+    alias.bytes = 0;
     entries_[result_url] = alias;
     return;
   }
@@ -164,12 +166,23 @@ void MeshCache::run_download(const std::string& url, const std::optional<std::st
   HttpOptions http;
   http.timeout = options_.fetch_timeout;
   DownloadResult result = http_download(url, tmp.string(), sha256, /*decompress_zstd=*/true, http);
+  entry.fetch_ms = elapsed_ms(start);
+  entry.bytes = result.bytes;
   if (result.ok()) {
     std::filesystem::path final_path = mesh_path(result.sha256);
     std::error_code ignored;
     std::filesystem::rename(tmp, final_path, ignored);
-    entry.state = CacheState::Ready;
-    entry.sha256 = result.sha256;
+    // Loaded now, as an update leaves its result loaded: the next /run finds it in memory.
+    auto loading = std::chrono::steady_clock::now();
+    try {
+      remember(result.sha256, std::make_shared<mesh::Mesh>(mesh::read_mesh(final_path.string())));
+      entry.state = CacheState::Ready;
+      entry.sha256 = result.sha256;
+    } catch (const std::exception& e) {
+      entry.error = "download of " + url + " is not a readable mesh: " + e.what();
+      std::filesystem::remove(final_path, ignored);
+    }
+    entry.apply_ms = elapsed_ms(loading);
   } else {
     entry.error = "download of " + url + " failed: " + result.describe();
   }
@@ -188,18 +201,25 @@ void MeshCache::run_update(const std::string& base, const std::string& correctio
                        ".mfc");
     HttpOptions http;
     http.timeout = options_.fetch_timeout;
+    auto fetching = std::chrono::steady_clock::now();
     DownloadResult fetched = http_download(correction_url, correction_path.string(),
                                            std::nullopt, false, http);
+    entry.fetch_ms = elapsed_ms(fetching);
+    entry.bytes = fetched.bytes;
     if (!fetched.ok()) throw IoError("correction " + correction_url + ": " + fetched.describe());
+    auto applying = std::chrono::steady_clock::now();
     std::ifstream in(correction_path, std::ios::binary);
     std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    auto result = std::make_shared<mesh::Mesh>(apply_correction(
-        *loaded.mesh,
-        std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(bytes.data()),
-                                      bytes.size())));
-    std::string sha = store(result);
-    if (sha != result_sha256)
-      throw IoError("corrected mesh hash " + sha + " differs from the producer's " + result_sha256);
+    std::span<const std::uint8_t> correction(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size());
+    // Checked before anything is stored: a mismatching mesh is never kept. apply_correction
+    // checks the base's hash and that the result is the one the correction promises.
+    CorrectionHeader header = read_correction_header(correction);
+    if (header.result_sha256 != result_sha256)
+      throw IoError("the correction yields " + header.result_sha256 + ", not the producer's " + result_sha256);
+    auto result = std::make_shared<mesh::Mesh>(apply_correction(*loaded.mesh, correction));
+    const std::string& sha = result_sha256;
+    store_as(result, sha);
+    entry.apply_ms = elapsed_ms(applying);
     entry.state = CacheState::Ready;
     entry.sha256 = sha;
   } catch (const std::exception& e) {
@@ -208,12 +228,16 @@ void MeshCache::run_update(const std::string& base, const std::string& correctio
     std::filesystem::path tmp = options_.dir / "meshes" / ("fallback-" + result_sha256 + ".ply.zst");
     HttpOptions http;
     http.timeout = options_.fetch_timeout;
+    auto fetching = std::chrono::steady_clock::now();
     DownloadResult whole = http_download(result_url, tmp.string(), result_sha256, true, http);
+    entry.fetch_ms += elapsed_ms(fetching);
+    entry.bytes += whole.bytes;
     if (whole.ok()) {
       std::error_code ignored;
       std::filesystem::rename(tmp, mesh_path(result_sha256), ignored);
       entry.state = CacheState::Ready;
       entry.how = "update-fallback";
+      entry.error = why;  // why the correction was not used
     } else {
       entry.error = "update failed (" + why + ") and so did the whole download: " + whole.describe();
     }
@@ -247,9 +271,20 @@ std::optional<CacheEntry> MeshCache::find(const std::string& key) const {
   if (it != entries_.end()) return it->second;
   auto by_sha = url_of_sha_.find(key);
   if (by_sha != url_of_sha_.end()) return entries_.at(by_sha->second);
-  for (const auto& [url, entry] : entries_)  // a pending entry known by its expected hash
-    if (entry.sha256 == key) return entry;
+  if (const CacheEntry* entry = by_expected_sha(key)) return *entry;
   return std::nullopt;
+}
+
+// An entry not ready yet, known by the hash it should yield: a pending one before a failed one
+// (a download that failed may have been asked again from elsewhere).
+const CacheEntry* MeshCache::by_expected_sha(const std::string& sha256) const {
+  const CacheEntry* failed = nullptr;
+  for (const auto& [url, entry] : entries_) {
+    if (entry.sha256 != sha256) continue;
+    if (entry.state != CacheState::Failed) return &entry;
+    failed = &entry;
+  }
+  return failed;
 }
 
 MeshCache::Loaded MeshCache::wait_mesh(const std::string& key, std::chrono::milliseconds timeout) {
@@ -266,9 +301,7 @@ MeshCache::Loaded MeshCache::wait_mesh(const std::string& key, std::chrono::mill
       if (it != entries_.end()) return &it->second;
       auto by_sha = url_of_sha_.find(key);
       if (by_sha != url_of_sha_.end()) return &entries_.at(by_sha->second);
-      for (const auto& [url, entry] : entries_)
-        if (entry.sha256 == key) return &entry;
-      return nullptr;
+      return by_expected_sha(key);
     };
     bool settled = changed_.wait_for(lock, timeout, [&] {
       const CacheEntry* e = current();
@@ -303,12 +336,16 @@ void MeshCache::remember(const std::string& sha256, std::shared_ptr<const mesh::
 
 std::string MeshCache::store(std::shared_ptr<const mesh::Mesh> mesh) {
   std::string sha = mesh::mesh_sha256(*mesh);
+  store_as(mesh, sha);
+  return sha;
+}
+
+void MeshCache::store_as(std::shared_ptr<const mesh::Mesh> mesh, const std::string& sha) {
   std::filesystem::path path = mesh_path(sha);
   if (!std::filesystem::exists(path)) mesh::write_mesh(*mesh, path.string());
   remember(sha, mesh);
   std::string url = "local:" + sha;
   set_entry(CacheEntry{url, CacheState::Ready, sha, "", 0, "local"});
-  return sha;
 }
 
 std::filesystem::path MeshCache::store_file(const std::string& name, const std::string& bytes) {

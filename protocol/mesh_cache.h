@@ -35,7 +35,10 @@ struct CacheEntry {
   std::string sha256;       // of the canonical PLY (known when ready, or expected up front)
   std::string error;        // when failed
   std::int64_t ms = 0;      // time the download or update took
-  std::string how;          // "download", "update", "local"
+  std::string how;          // "download", "update", "update-fallback", "local"
+  std::uint64_t bytes = 0;  // received on the wire (the correction, or the whole mesh)
+  std::int64_t fetch_ms = 0;  // of `ms`, fetching those bytes
+  std::int64_t apply_ms = 0;  // of `ms`, applying the correction (or loading the mesh)
 };
 
 struct MeshCacheOptions {
@@ -99,7 +102,9 @@ class MeshCache {
                   const std::string& result_url, const std::string& result_sha256);
   void set_entry(const CacheEntry& entry);
   void remember(const std::string& sha256, std::shared_ptr<const mesh::Mesh> mesh);
+  void store_as(std::shared_ptr<const mesh::Mesh> mesh, const std::string& sha256);
   void check_origin(const std::string& url) const;
+  const CacheEntry* by_expected_sha(const std::string& sha256) const;  // \pre mutex_ held
 
   MeshCacheOptions options_;
   sqlite3* db_ = nullptr;

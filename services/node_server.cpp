@@ -2,6 +2,7 @@
 
 #include <httplib.h>
 
+#include <algorithm>
 #include <chrono>
 #include <condition_variable>
 #include <map>
@@ -24,7 +25,6 @@ namespace {
 using nlohmann::json;
 using Clock = std::chrono::steady_clock;
 
-constexpr std::chrono::seconds kRunAnswerWait{20};      // then 202 + task URL
 constexpr std::chrono::minutes kInputWait{30};          // pending download/update of an input
 constexpr std::size_t kMaxJsonBody = 1 << 20;
 const char* kVersion = "0.1.0";
@@ -89,7 +89,10 @@ struct NodeServer::Impl {
     std::string error;
     int error_status = 500;
     std::atomic<bool> cancel{false};
+    Clock::time_point finished;
   };
+  // A finished task's answer stays this long for its poller, then goes.
+  static constexpr std::chrono::minutes kKeepFinishedTasks{10};
   std::mutex tasks_mutex;
   std::condition_variable task_done;
   std::map<std::string, std::shared_ptr<Task>> tasks;
@@ -145,12 +148,20 @@ struct NodeServer::Impl {
     origins = std::move(fresh);
   }
 
+  bool offers(const std::string& name) const {
+    return options.operations.empty() ||
+           std::find(options.operations.begin(), options.operations.end(), name) != options.operations.end();
+  }
+
   json service_json() const {
+    json offered = json::array();
+    for (const auto& op : operations_to_json())
+      if (offers(op.value("name", ""))) offered.push_back(op);
     return {{"name", "meshflow-node"},
             {"version", kVersion},
             {"url", url()},
             {"capacity_vertices", options.capacity_vertices},
-            {"operations", operations_to_json()}};
+            {"operations", offered}};
   }
 
   // Runs one operation on the mesh named by `input` (URL or SHA-256). Atomic operations store
@@ -250,10 +261,14 @@ struct NodeServer::Impl {
       res.status = 202;
       res.set_content(json{{"state", "pending"}, {"result", result}}.dump(), "application/json");
     });
+    // ?url=U: the entry of that download or update (several may yield the same mesh).
     server.Get(R"(/cache/([0-9a-f]{64}))", [this](const httplib::Request& req, httplib::Response& res) {
-      auto entry = cache->find(req.matches[1]);
-      if (!entry) throw protocol::NotFound("no cache entry for " + std::string(req.matches[1]));
-      json body{{"state", protocol::to_string(entry->state)}, {"ms", entry->ms}, {"how", entry->how}};
+      std::string sha = req.matches[1];
+      auto entry = cache->find(req.has_param("url") ? req.get_param_value("url") : sha);
+      if (entry && entry->sha256 != sha) entry.reset();
+      if (!entry) throw protocol::NotFound("no cache entry for " + sha);
+      json body{{"state", protocol::to_string(entry->state)}, {"ms", entry->ms}, {"how", entry->how},
+                {"bytes", entry->bytes}, {"fetch_ms", entry->fetch_ms}, {"apply_ms", entry->apply_ms}};
       if (!entry->error.empty()) body["error"] = entry->error;
       res.set_content(body.dump(), "application/json");
     });
@@ -262,10 +277,14 @@ struct NodeServer::Impl {
       json body = parse_body(req);
       std::string name = req.matches[1];
       find_operation(name);  // unknown names: 400 before a task starts
+      if (!offers(name)) throw protocol::NotFound("this node does not offer " + name);
       auto task = std::make_shared<Task>();
       std::string id;
       {
         std::lock_guard lock(tasks_mutex);
+        std::erase_if(tasks, [](const auto& entry) {
+          return entry.second->state != "running" && Clock::now() - entry.second->finished > kKeepFinishedTasks;
+        });
         id = std::to_string(next_task++);
         tasks[id] = task;
       }
@@ -287,10 +306,11 @@ struct NodeServer::Impl {
         task->result = std::move(result);
         task->error = std::move(error);
         task->error_status = status;
+        task->finished = Clock::now();
         task_done.notify_all();
       }).detach();
       std::unique_lock lock(tasks_mutex);
-      task_done.wait_for(lock, kRunAnswerWait, [&] { return task->state != "running"; });
+      task_done.wait_for(lock, options.answer_within, [&] { return task->state != "running"; });
       if (task->state == "running") {
         res.status = 202;
         res.set_content(json{{"task", url() + "/tasks/" + id}, {"state", "running"}}.dump(),
@@ -313,7 +333,10 @@ struct NodeServer::Impl {
       const Task& task = *it->second;
       json body{{"state", task.state}};
       if (task.state == "done") body["result"] = task.result;
-      if (!task.error.empty()) body["error"] = json::parse(task.error, nullptr, false);
+      if (!task.error.empty()) {
+        body["error"] = json::parse(task.error, nullptr, false);
+        body["status"] = task.error_status;
+      }
       res.set_content(body.dump(), "application/json");
     });
     server.Delete(R"(/tasks/(\d+))", [this](const httplib::Request& req, httplib::Response& res) {

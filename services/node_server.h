@@ -6,11 +6,13 @@
 // and fetches only from the hub and the nodes the hub names.
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
 #include <string>
 #include <thread>
+#include <vector>
 
 namespace meshflow::services {
 
@@ -23,6 +25,9 @@ struct NodeOptions {
   std::string token;                     // the hub's node token
   std::uint64_t capacity_vertices = 50'000'000;  // largest mesh taken in memory
   int threads = 8;                       // HTTP worker threads
+  std::vector<std::string> operations;   // the operations offered; empty: every one
+  // A /run not finished within this answers 202 with a task URL to poll (DESIGN §4).
+  std::chrono::milliseconds answer_within{std::chrono::seconds(20)};
 };
 
 class NodeServer {

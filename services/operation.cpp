@@ -134,7 +134,9 @@ const OperationSpec& find_operation(std::string_view name) {
 
 Params resolve_params(const OperationSpec& spec, const std::map<std::string, std::string>& given) {
   Params params;
-  for (const auto& [name, text] : given) {
+  for (const auto& entry : given) {
+    const std::string& name = entry.first;  // (clang 14 cannot capture structured bindings)
+    const std::string& text = entry.second;
     auto it = std::find_if(spec.params.begin(), spec.params.end(), [&](const ParamSpec& p) { return p.name == name; });
     if (it == spec.params.end()) {
       std::string known;
@@ -170,7 +172,7 @@ AtomicResult run_atomic(const OperationSpec& spec, const mesh::Mesh& input, cons
   if (spec.name == "RemoveSmallestComponents") remove_smallest_components(m);
   else if (spec.name == "RemoveDegenerateTriangles") remove_degenerate_triangles(m);
   else if (spec.name == "AddNoise") add_noise(m, percent("maxDistance"), static_cast<std::uint64_t>(params.at("seed")));
-  else if (spec.name == "LaplacianSmoothing") laplacian_smoothing(m, static_cast<int>(params.at("iterations")));
+  else if (spec.name == "LaplacianSmoothing") laplacian_smoothing(m, static_cast<int>(params.at("iterations")), context.cancel);
   else if (spec.name == "FillHoles") fill_holes(m, false);
   else if (spec.name == "FillHolesHeightField") fill_holes(m, true);
   else throw InvalidInput("operation " + spec.name + " has no implementation");

@@ -179,7 +179,7 @@ void remove_smallest_components(EditMesh& m) {
     if (m.vertex_alive(static_cast<Index>(v)) && !used[v]) m.remove_vertex(static_cast<Index>(v));
 }
 
-void laplacian_smoothing(EditMesh& m, int iterations) {
+void laplacian_smoothing(EditMesh& m, int iterations, const std::atomic<bool>* cancel) {
   if (iterations < 1) throw InvalidInput("iterations must be at least 1, got " + std::to_string(iterations));
   std::size_t V = m.vertex_slots();
   auto edges = edge_uses(m);
@@ -205,6 +205,7 @@ void laplacian_smoothing(EditMesh& m, int iterations) {
   std::vector<Point> current(V), next(V);
   for (std::size_t v = 0; v < V; ++v) current[v] = m.position(static_cast<Index>(v));
   for (int it = 0; it < iterations; ++it) {
+    if (cancel && cancel->load()) throw std::runtime_error("cancelled");
     for (std::size_t v = 0; v < V; ++v) {
       if (fixed[v]) {
         next[v] = current[v];

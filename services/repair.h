@@ -2,6 +2,7 @@
 // The local repair operations of DESIGN §5 (thesis Appendix A). Each edits through a
 // protocol::EditMesh, so its correction is the list of edits it made.
 
+#include <atomic>
 #include <cstdint>
 
 #include "mesh/mesh.h"
@@ -18,7 +19,9 @@ void remove_smallest_components(protocol::EditMesh& mesh);
 // average of its edge neighbours (Jacobi: all from the previous positions). Boundary vertices
 // (on an edge used by one triangle) and unreferenced vertices do not move, so holes keep their
 // rims and the surface does not shrink from its border. One MoveAllVertices edit.
-void laplacian_smoothing(protocol::EditMesh& mesh, int iterations);
+// \throws std::runtime_error("cancelled") when `cancel` turns true (checked every iteration;
+// the mesh is then left as it was).
+void laplacian_smoothing(protocol::EditMesh& mesh, int iterations, const std::atomic<bool>* cancel = nullptr);
 
 // Moves every vertex along its area-weighted normal by a uniform random distance in
 // [-max_distance, max_distance] (absolute). Reproducible: mt19937_64 seeded with `seed`, one

@@ -103,6 +103,7 @@ struct HubServer::Impl {
         list.push_back({{"url", s.url},
                         {"capacity_vertices", s.capacity_vertices},
                         {"active_steps", s.active_steps},
+                        {"bandwidth_mbps", s.bandwidth_mbps},
                         {"operations", s.service.value("operations", json::array()).size()},
                         {"version", s.service.value("version", "")}});
       res.set_content(json{{"services", list}}.dump(), "application/json");
@@ -129,13 +130,14 @@ struct HubServer::Impl {
     });
   }
 
-  // POST /api/jobs: multipart fields `workflow` (XML) and `input` (the mesh, streamed to disk).
+  // POST /api/jobs: multipart fields `workflow` (XML) and `input` (the mesh, streamed to disk)
+  // or `input_url` (fetched by the hub), optional `transfer` ("output": always the whole mesh).
   void job_routes() {
     constexpr std::size_t kMaxField = 4 << 20;
     server.Post("/api/jobs", [this](const httplib::Request& req, httplib::Response& res,
                                     const httplib::ContentReader& reader) {
       if (!req.is_multipart_form_data())
-        throw InvalidInput("POST /api/jobs wants multipart/form-data with fields 'workflow' and 'input'");
+        throw InvalidInput("POST /api/jobs wants multipart/form-data with fields 'workflow' and 'input' or 'input_url'");
       std::string id = jobs->new_id();
       std::filesystem::path dir = jobs->job_dir(id);
       std::filesystem::create_directories(dir);
@@ -183,12 +185,19 @@ struct HubServer::Impl {
         discard();
         throw InvalidInput("missing the 'workflow' field (the workflow XML)");
       }
-      if (upload_bytes == 0) {
+      JobRequest request;
+      request.id = id;
+      request.workflow_xml = fields["workflow"];
+      if (upload_bytes > 0) request.upload = upload;
+      else std::filesystem::remove(upload);
+      request.input_url = fields["input_url"];
+      if (fields.count("transfer")) request.transfer = fields["transfer"];
+      if (upload_bytes > 0 && !request.input_url.empty()) {
         discard();
-        throw InvalidInput("missing the 'input' field (the mesh file)");
+        throw InvalidInput("give either 'input' (a mesh file) or 'input_url', not both");
       }
       try {
-        jobs->submit(fields["workflow"], upload);
+        jobs->submit(request);
       } catch (...) {
         discard();
         throw;
@@ -268,7 +277,10 @@ int HubServer::start() {
                                       : -1);
   if (d.port <= 0)
     throw IoError("cannot listen on " + d.options.host + ":" + std::to_string(d.options.port));
-  d.jobs->set_hub_url(d.url());
+  d.jobs->set_fetch_policy(d.options.allow_private_fetch, d.options.max_upload_bytes);
+  d.jobs->set_max_loop_iterations(d.options.max_loop_iterations);
+  d.jobs->set_default_transfer(d.options.default_transfer);
+  d.jobs->start(d.url());
   d.thread = std::thread([&d] { d.server.listen_after_bind(); });
   d.services->prune_unreachable();
   return d.port;

@@ -25,6 +25,8 @@ struct HubOptions {
   std::uint64_t max_upload_bytes = 8ull << 30; // meshes uploaded to /api/jobs
   int threads = 16;
   std::string public_url;                      // how nodes reach the hub; default http://host:port
+  int max_loop_iterations = 100;               // bound on each while loop of a job
+  std::string default_transfer = "smaller";    // jobs' default: "output" forces whole meshes
 };
 
 class HubServer {

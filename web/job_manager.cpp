@@ -30,7 +30,7 @@ class ReplayingNodes : public engine::NodeClient {
       : done_(std::move(done)), live_(live) {}
   engine::StepReport run_atomic(const std::string& operation, const services::Params& params) override {
     if (const engine::StepRecord* r = next(operation)) {
-      if (!r->output_url.empty()) live_.set_current(r->output_url, r->output_sha256);
+      if (!r->output_url.empty()) live_.set_current(r->output_url, r->output_sha256, r->node);
       return report_of(*r);
     }
     return live_.run_atomic(operation, params);
@@ -39,6 +39,7 @@ class ReplayingNodes : public engine::NodeClient {
     if (const engine::StepRecord* r = next(operation)) return report_of(*r);
     return live_.run_analysis(operation);
   }
+  void expect_later(const std::vector<std::string>& operations) override { live_.expect_later(operations); }
   std::size_t replayed() const { return at_; }
 
  private:
@@ -54,6 +55,7 @@ class ReplayingNodes : public engine::NodeClient {
     report.operation = r.operation;
     report.node = r.node;
     report.run_ms = r.run_ms;
+    report.wait_ms = r.wait_ms;
     report.transfer_ms = r.transfer_ms;
     report.update_ms = r.update_ms;
     report.sent = r.sent;
@@ -76,7 +78,15 @@ JobManager::JobManager(std::filesystem::path data_dir, ServiceRegistry& services
   std::filesystem::create_directories(data_dir_ / "jobs");
   // Jobs a previous hub left unfinished go on from their last finished step (run()).
   for (const auto& id : journal_.unfinished()) queue_.push_back(id), cancel_[id] = std::make_shared<std::atomic<bool>>(false);
-  for (int i = 0; i < workers; ++i) workers_.emplace_back([this] { worker(); });
+  worker_count_ = workers;
+}
+
+void JobManager::start(std::string hub_url) {
+  std::lock_guard lock(mutex_);
+  hub_url_ = std::move(hub_url);
+  if (!workers_.empty()) return;
+  // Only now: a resumed job needs the URL nodes reach the hub at.
+  for (int i = 0; i < worker_count_; ++i) workers_.emplace_back([this] { worker(); });
 }
 
 JobManager::~JobManager() {
@@ -103,17 +113,45 @@ std::filesystem::path JobManager::input_file(const std::string& id) const { retu
 std::filesystem::path JobManager::output_file(const std::string& id) const { return job_dir(id) / "output.ply"; }
 
 std::string JobManager::submit(const std::string& workflow_xml, const std::filesystem::path& upload) {
-  engine::Workflow workflow = engine::parse_workflow(workflow_xml, "workflow.xml");
+  JobRequest request;
+  request.id = upload.parent_path().filename().string();
+  request.workflow_xml = workflow_xml;
+  request.upload = upload;
+  return submit(request);
+}
+
+std::string JobManager::submit(const JobRequest& request) {
+  engine::Workflow workflow = engine::parse_workflow(request.workflow_xml, "workflow.xml");
   engine::validate_workflow(workflow, "workflow.xml", services::operation_specs());
-  std::string id = upload.parent_path().filename().string();
-  mesh::Mesh input = mesh::read_mesh(upload.string());
-  mesh::write_mesh(input, input_file(id).string());
-  std::filesystem::remove(upload);
+  std::string transfer = request.transfer.empty() ? default_transfer_ : request.transfer;
+  engine::transfer_mode_from_string(transfer);  // a clear 400 for a bad value
+  const std::string& id = request.id;
+  std::filesystem::create_directories(job_dir(id));
   engine::JobRecord job;
   job.id = id;
-  job.workflow_xml = workflow_xml;
-  job.input_path = input_file(id).string();
-  job.input_sha256 = mesh::mesh_sha256(input);
+  job.workflow_xml = request.workflow_xml;
+  job.workflow_id = request.workflow_id;
+  job.transfer = transfer;
+  if (!request.upload.empty()) {
+    mesh::Mesh input = mesh::read_mesh(request.upload.string());
+    mesh::write_mesh(input, input_file(id).string());
+    std::filesystem::remove(request.upload);
+    job.input_path = input_file(id).string();
+    job.input_sha256 = mesh::mesh_sha256(input);
+  } else {
+    job.input_url = !request.input_url.empty() ? request.input_url : workflow.input_url.value_or("");
+    if (job.input_url.empty())
+      throw InvalidInput("no input mesh: give the field 'input' (a mesh file) or 'input_url', or name one in the "
+                         "workflow's <input>");
+    if (!allow_private_fetch_) {
+      std::string why = protocol::why_not_public(job.input_url);
+      if (!why.empty())
+        throw InvalidInput("input_url " + job.input_url + ": " + why +
+                           "; the hub fetches only public addresses unless started with --allow-private-fetch");
+    } else if (job.input_url.rfind("http://", 0) != 0 && job.input_url.rfind("https://", 0) != 0) {
+      throw InvalidInput("input_url must be an http or https URL, not " + job.input_url);
+    }
+  }
   journal_.create(job);
   {
     std::lock_guard lock(mutex_);
@@ -138,6 +176,30 @@ void JobManager::worker() {
   }
 }
 
+// The hub fetches a user's input_url itself (DESIGN §3) and keeps the canonical copy that the
+// nodes download.
+void JobManager::fetch_input(engine::JobRecord& job) {
+  std::filesystem::path fetched = job_dir(job.id) / "fetched";
+  protocol::HttpOptions http;
+  http.timeout = std::chrono::minutes(30);
+  http.public_only = !allow_private_fetch_;
+  http.follow_redirects = true;
+  http.max_bytes = max_fetch_bytes_;
+  protocol::DownloadResult got = protocol::http_download(job.input_url, fetched.string(), std::nullopt, false, http);
+  if (!got.ok()) throw IoError("fetching input_url " + job.input_url + ": " + got.describe());
+  mesh::Mesh input;
+  try {
+    input = mesh::read_mesh(fetched.string());
+  } catch (const std::exception& e) {
+    throw InvalidInput("input_url " + job.input_url + " is not a mesh: " + e.what());
+  }
+  mesh::write_mesh(input, input_file(job.id).string());
+  std::filesystem::remove(fetched);
+  job.input_path = input_file(job.id).string();
+  job.input_sha256 = mesh::mesh_sha256(input);
+  journal_.set_input(job.id, job.input_path, job.input_sha256);
+}
+
 void JobManager::run(const std::string& id) {
   std::optional<engine::JobRecord> job = journal_.get(id);
   if (!job) return;
@@ -147,35 +209,44 @@ void JobManager::run(const std::string& id) {
     cancelled = cancel_[id];
   }
   journal_.set_state(id, engine::JobState::Running);
+  std::optional<engine::StepRecord> running;  // the step under way, for progress
+  int seq = 0;
   try {
+    if (job->input_path.empty()) fetch_input(*job);
+    auto started = std::chrono::steady_clock::now();
     engine::Workflow workflow = engine::parse_workflow(job->workflow_xml, "workflow.xml");
     engine::ValidatedWorkflow valid = engine::validate_workflow(workflow, "workflow.xml", services::operation_specs());
-    // Nodes taking part: every registered node offering an operation the workflow uses.
-    std::vector<std::string> used = engine::operations_used(workflow);
     engine::HttpNodeOptions options;
     options.token = token_;
-    for (const auto& s : services_.list())
-      for (const auto& op : used)
-        if (s.offers(op)) {
-          options.nodes.push_back(s.url);
-          break;
-        }
-    options.pick = [this](const std::string& op, const std::vector<std::string>& exclude) {
-      return services_.choose(op, exclude);
-    };
+    options.candidates = [this](const std::string& op) { return services_.candidates(op); };
     options.load = [this](const std::string& node, int delta) { services_.adjust_load(node, delta); };
+    options.measured = [this](const std::string& node, std::uint64_t bytes, std::int64_t ms) {
+      services_.record_transfer(node, bytes, ms);
+    };
     options.cancelled = [cancelled] { return cancelled->load(); };
+    options.transfer = engine::transfer_mode_from_string(job->transfer);
+    options.on_start = [&](const std::string& op, const std::string& node) {
+      engine::StepRecord s;
+      s.seq = seq;
+      s.operation = op;
+      s.kind = services::find_operation(op).kind == services::OperationKind::Analysis ? "analysis" : "atomic";
+      s.node = node;
+      s.state = "running";
+      running = s;
+      journal_.put_step(id, s);
+    };
     mesh::Mesh input = mesh::read_mesh(job->input_path);
     options.reference_diagonal = mesh::bounding_box(input).diagonal();
     std::string input_url = hub_url_ + "/api/jobs/" + id + "/input";
     engine::HttpNodeClient live(options, input_url, job->input_sha256);
-    live.broadcast_input();
+    live.plan(engine::operations_used(workflow));
+    live.broadcast();
     std::vector<engine::StepRecord> done;
     for (const auto& s : job->steps)
       if (s.state == "done") done.push_back(s);
     ReplayingNodes nodes(done, live);
-    int seq = 0;
     engine::ExecutorOptions exec;
+    exec.max_loop_iterations = max_loop_iterations_;
     exec.cancelled = [cancelled] { return cancelled->load(); };
     exec.on_step = [&](const engine::StepReport& r) {
       engine::StepRecord s;
@@ -185,6 +256,7 @@ void JobManager::run(const std::string& id) {
       s.node = r.node;
       s.state = "done";
       s.run_ms = r.run_ms;
+      s.wait_ms = r.wait_ms;
       s.transfer_ms = r.transfer_ms;
       s.update_ms = r.update_ms;
       s.sent = r.sent;
@@ -193,23 +265,43 @@ void JobManager::run(const std::string& id) {
       if (r.is_analysis) s.value = r.value;
       s.output_sha256 = live.current_sha256();
       s.output_url = live.current_url();
+      running.reset();
       journal_.put_step(id, s);
     };
     engine::execute(valid, nodes, exec);
+    engine::BroadcastReport broadcast = live.broadcast_report();
     // The result travels once, to the hub, for the user.
     std::filesystem::path fetched = job_dir(id) / "output.ply.zst";
     protocol::HttpOptions http;
     http.timeout = std::chrono::minutes(30);
+    auto fetching = std::chrono::steady_clock::now();
     protocol::DownloadResult got =
         protocol::http_download(live.current_url(), fetched.string(), live.current_sha256(), true, http);
     if (!got.ok()) throw IoError("fetching the result from " + live.current_url() + ": " + got.describe());
+    if (!live.current_node().empty())
+      services_.record_transfer(live.current_node(), got.bytes,
+                                std::chrono::duration_cast<std::chrono::milliseconds>(
+                                    std::chrono::steady_clock::now() - fetching).count());
     mesh::Mesh output = mesh::read_mesh(fetched.string());
     mesh::write_mesh(output, output_file(id).string());
     std::filesystem::remove(fetched);
+    auto elapsed = std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now() - started);
+    journal_.set_timings(id, broadcast.ms, broadcast.bytes, elapsed.count());
     journal_.set_output(id, output_file(id).string(), live.current_sha256());
     journal_.set_state(id, engine::JobState::Done);
   } catch (const std::exception& e) {
-    journal_.set_state(id, cancelled->load() ? engine::JobState::Cancelled : engine::JobState::Failed, e.what());
+    {
+      std::lock_guard lock(mutex_);
+      if (stopping_) return;  // the hub is shutting down: the job resumes when it restarts
+    }
+    bool was_cancelled = cancelled->load();
+    if (running) {
+      running->state = was_cancelled ? "cancelled" : "failed";
+      running->error = e.what();
+      journal_.put_step(id, *running);
+    }
+    journal_.set_state(id, was_cancelled ? engine::JobState::Cancelled : engine::JobState::Failed,
+                       was_cancelled ? "cancelled" : e.what());
   }
 }
 
@@ -219,14 +311,20 @@ std::optional<json> JobManager::status(const std::string& id) const {
   json steps = json::array();
   for (const auto& s : job->steps) {
     json step{{"operation", s.operation}, {"kind", s.kind}, {"node", s.node}, {"state", s.state},
-              {"run_ms", s.run_ms}, {"transfer_ms", s.transfer_ms}, {"update_ms", s.update_ms},
+              {"run_ms", s.run_ms}, {"wait_ms", s.wait_ms}, {"transfer_ms", s.transfer_ms},
+              {"update_ms", s.update_ms},
               {"sent", s.sent.empty() ? json() : json(s.sent)}, {"correction_bytes", s.correction_bytes},
               {"output_bytes", s.output_bytes}};
     step["value"] = s.value ? json(*s.value) : json();
+    if (!s.error.empty()) step["error"] = s.error;
     steps.push_back(step);
   }
   return json{{"id", job->id}, {"state", engine::to_string(job->state)},
               {"error", job->error.empty() ? json() : json(job->error)}, {"created", job->created},
+              {"transfer", job->transfer}, {"input_url", job->input_url.empty() ? json() : json(job->input_url)},
+              {"broadcast_ms", job->broadcast_ms}, {"broadcast_bytes", job->broadcast_bytes},
+              {"elapsed_ms", job->elapsed_ms},
+              {"output_sha256", job->output_sha256.empty() ? json() : json(job->output_sha256)},
               {"steps", steps}};
 }
 

@@ -37,13 +37,10 @@ ServiceInfo ServiceRegistry::add(const std::string& url) {
   std::string base = url;
   while (!base.empty() && base.back() == '/') base.pop_back();
   if (protocol::url_origin(base).empty()) throw InvalidInput("not an http URL: " + url);
-  auto start = std::chrono::steady_clock::now();
   protocol::HttpOptions http;
   http.timeout = std::chrono::seconds(10);
   protocol::HttpResult res = protocol::http_request("GET", base + "/service.json", {}, http);
   if (!res.ok()) throw IoError("the node at " + base + " did not answer /service.json: " + res.describe());
-  double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   json service = json::parse(res.body, nullptr, false);
   if (!service.is_object() || !service.contains("operations") || !service["operations"].is_array())
     throw InvalidInput(base + "/service.json is not a service description (no operations)");
@@ -51,14 +48,13 @@ ServiceInfo ServiceRegistry::add(const std::string& url) {
   info.url = base;
   info.service = service;
   info.capacity_vertices = service.value("capacity_vertices", std::uint64_t{0});
-  // A first, rough bandwidth figure from the size of the description and its round trip;
-  // the engine refines its choice by load.
-  info.bandwidth_mbps = seconds > 0 ? res.body.size() * 8 / seconds / 1e6 : 0;
+  // Bandwidth comes from the transfers of jobs (record_transfer), never from this small answer.
   std::lock_guard lock(mutex_);
   auto it = std::find_if(services_.begin(), services_.end(),
                          [&](const ServiceInfo& s) { return s.url == base; });
   if (it != services_.end()) {
     info.active_steps = it->active_steps;
+    info.bandwidth_mbps = it->bandwidth_mbps;
     *it = info;
   } else {
     services_.push_back(info);
@@ -100,19 +96,34 @@ std::optional<ServiceInfo> ServiceRegistry::find(const std::string& url) const {
   return std::nullopt;
 }
 
+std::vector<engine::NodeCandidate> ServiceRegistry::candidates(const std::string& operation) const {
+  std::lock_guard lock(mutex_);
+  std::vector<engine::NodeCandidate> out;
+  for (const auto& s : services_)
+    if (s.offers(operation))
+      out.push_back({.url = s.url, .active_steps = s.active_steps, .bandwidth_mbps = s.bandwidth_mbps});
+  return out;
+}
+
 std::optional<std::string> ServiceRegistry::choose(const std::string& operation,
                                                    const std::vector<std::string>& exclude) const {
+  std::vector<engine::NodeCandidate> offering = candidates(operation);
+  std::erase_if(offering, [&](const engine::NodeCandidate& c) {
+    return std::find(exclude.begin(), exclude.end(), c.url) != exclude.end();
+  });
+  return engine::choose_node(offering);
+}
+
+void ServiceRegistry::record_transfer(const std::string& url, std::uint64_t bytes, std::int64_t ms) {
   std::lock_guard lock(mutex_);
-  const ServiceInfo* best = nullptr;
-  for (const auto& s : services_) {
-    if (!s.offers(operation)) continue;
-    if (std::find(exclude.begin(), exclude.end(), s.url) != exclude.end()) continue;
-    if (!best || s.active_steps < best->active_steps ||
-        (s.active_steps == best->active_steps && s.bandwidth_mbps > best->bandwidth_mbps))
-      best = &s;
-  }
-  if (!best) return std::nullopt;
-  return best->url;
+  for (auto& s : services_)
+    if (s.url == url) {
+      double updated = engine::updated_bandwidth(s.bandwidth_mbps, bytes, ms);
+      if (updated == s.bandwidth_mbps) return;
+      s.bandwidth_mbps = updated;
+      save();
+      return;
+    }
 }
 
 void ServiceRegistry::adjust_load(const std::string& url, int delta) {

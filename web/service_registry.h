@@ -11,13 +11,15 @@
 #include <string>
 #include <vector>
 
+#include "engine/node_choice.h"
+
 namespace meshflow::web {
 
 struct ServiceInfo {
   std::string url;
   nlohmann::json service;              // the node's /service.json
   std::uint64_t capacity_vertices = 0;
-  double bandwidth_mbps = 0;           // measured when registering (0: unknown)
+  double bandwidth_mbps = 0;           // measured from real transfers into it (0: not yet)
   int active_steps = 0;                // steps the hub is running on it now
   bool offers(const std::string& operation) const;
 };
@@ -35,10 +37,15 @@ class ServiceRegistry {
   std::vector<ServiceInfo> list() const;
   std::optional<ServiceInfo> find(const std::string& url) const;
 
-  // The node to run `operation` on: offers it, not excluded, least loaded, then fastest.
+  // The node to run `operation` on: offers it, not excluded, least loaded, then fastest
+  // (engine/node_choice.h).
   std::optional<std::string> choose(const std::string& operation,
                                     const std::vector<std::string>& exclude = {}) const;
+  // The nodes offering `operation`, with their load and measured bandwidth.
+  std::vector<engine::NodeCandidate> candidates(const std::string& operation) const;
   void adjust_load(const std::string& url, int delta);
+  // A transfer of `bytes` into the node took `ms`: refines its bandwidth estimate.
+  void record_transfer(const std::string& url, std::uint64_t bytes, std::int64_t ms);
 
   // Every operation offered by some node (first description wins), for /api/operations.
   nlohmann::json operations() const;

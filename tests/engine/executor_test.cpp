@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <deque>
 
 #include "engine/in_process_node.h"
@@ -23,6 +24,9 @@ class ScriptedNode : public NodeClient {
     log.push_back(op);
     return {.operation = op};
   }
+  // What the executor said may still run, before each step.
+  std::vector<std::vector<std::string>> later;
+  void expect_later(const std::vector<std::string>& ops) override { later.push_back(ops); }
   StepReport run_analysis(const std::string& op) override {
     auto& queue = answers[op];
     double value = queue.empty() ? 0 : queue.front();
@@ -58,6 +62,24 @@ TEST(Executor, RunsTheActiveTaskListThroughNestedIfAndWhile) {
                           "AddNoise", "NumberOfBoundaryLoops=2", "NumberOfComponents=3", "RemoveSmallestComponents",
                           "NumberOfBoundaryLoops=1", "NumberOfComponents=1", "FillHoles",
                           "NumberOfBoundaryLoops=0", "LaplacianSmoothing"}));
+}
+
+TEST(Executor, TellsTheNodesWhichOperationsMayStillRun) {
+  ScriptedNode node;
+  node.answers["NumberOfBoundaryLoops"] = {1, 0};
+  node.answers["NumberOfComponents"] = {1};
+  run(kNested, node);
+  using Ops = std::vector<std::string>;
+  ASSERT_EQ(node.log.size(), node.later.size());
+  // Before AddNoise: everything after it.
+  EXPECT_EQ(node.later[0], (Ops{"NumberOfBoundaryLoops", "NumberOfComponents", "RemoveSmallestComponents",
+                                "FillHoles", "LaplacianSmoothing"}));
+  // Inside the loop, before FillHoles: the loop may come round again, so its operations count.
+  auto fill = std::find(node.log.begin(), node.log.end(), "FillHoles") - node.log.begin();
+  EXPECT_EQ(node.later[fill], (Ops{"NumberOfBoundaryLoops", "NumberOfComponents", "RemoveSmallestComponents",
+                                   "FillHoles", "LaplacianSmoothing"}));
+  // The last step: nothing after it.
+  EXPECT_EQ(node.later.back(), Ops{});
 }
 
 TEST(Executor, StopsARunawayLoopWithItsLine) {

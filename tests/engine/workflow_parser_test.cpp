@@ -106,5 +106,33 @@ TEST(WorkflowParser, RefusesExternalEntitiesAndEntityBombs) {
   EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(5));
 }
 
+// Found by tests/fuzz/fuzz_workflow.cpp: Xerces reports an element where the schema allows
+// none only at its end, after the handler has seen it; the parser once kept pointers into a
+// body that then grew (heap use after free). Such documents are refused, never crash.
+TEST(WorkflowParser, RefusesTasksWhereTheSchemaAllowsNoneWithoutCrashing) {
+  std::string inside_name = "<workflow><body><if><condition><analysis><name>NumberOfCom\n"
+                            "<atomic><name>LaplacianSmoothing</name></atomic>\n"
+                            "<atomic><name>FillHoles</name></atomic><atomic><name>FillHoles</name></atomic>"
+                            "</name></analysis></condition><body/></if></body></workflow>";
+  EXPECT_NE(error_of(inside_name).find("w.xml:"), std::string::npos);
+  std::string stray_else = "<workflow><else><atomic><name>FillHoles</name></atomic></else><body/></workflow>";
+  EXPECT_NE(error_of(stray_else), "");
+  // Deep nesting of valid bodies still reads every task in order.
+  std::string xml = "<workflow><body>";
+  for (int i = 0; i < 40; ++i)
+    xml += "<atomic><name>FillHoles</name></atomic><while><condition><analysis><name>IsManifold</name></analysis>"
+           "</condition><body>";
+  for (int i = 0; i < 40; ++i) xml += "</body></while>";
+  xml += "</body></workflow>";
+  Workflow w = parse_workflow(xml, "w.xml");
+  const Body* body = &w.body;
+  for (int i = 0; i < 40; ++i) {
+    ASSERT_EQ(body->size(), 2u);
+    EXPECT_EQ((*body)[0].name, "FillHoles");
+    body = &(*body)[1].body;
+  }
+  EXPECT_TRUE(body->empty());
+}
+
 }  // namespace
 }  // namespace meshflow::engine

@@ -4,6 +4,8 @@
 
 #include <chrono>
 #include <fstream>
+#include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <thread>
 
@@ -177,6 +179,280 @@ TEST(Hub, ARestartedHubGoesOnFromTheLastFinishedStep) {
                         "/real/igea_tristrips.ply -o " + dir.file("ref.ply") + " 2>/dev/null";
   ASSERT_EQ(std::system(command.c_str()), 0);
   EXPECT_EQ(mesh::read_mesh(dir.file("out.ply")), mesh::read_mesh(dir.file("ref.ply")));
+}
+
+// The thesis's conditional workflow (Table 4.4): remove components only when there are
+// several, fill holes only when there are some.
+const char* kConditional = R"(<workflow><body>
+  <if><condition><analysis><name>NumberOfComponents</name><operator>GT</operator><value>1</value></analysis></condition>
+    <body><atomic><name>RemoveSmallestComponents</name></atomic></body></if>
+  <if><condition><analysis><name>NumberOfBoundaryLoops</name><operator>GT</operator><value>0</value></analysis></condition>
+    <body><atomic><name>FillHoles</name></atomic></body></if>
+</body></workflow>)";
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+// Runs a shell command, bounded by `timeout` seconds; returns its exit status.
+int shell(const std::string& command, int timeout = 120) {
+  int status = std::system(("timeout " + std::to_string(timeout) + " " + command).c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+json get_json(const std::string& url) {
+  return json::parse(protocol::http_request("GET", url).body, nullptr, false);
+}
+
+TEST(Hub, RunWithHubFollowsTheJobAndBothTransferModesGiveTheSameOutput) {
+  TempDir dir;
+  ChildProcess up({MESHFLOW_BINARY, "up", "--port", "0", "--data", dir.file("data")});
+  std::string hub = up.ready_url();
+  ASSERT_FALSE(hub.empty());
+  std::ofstream(dir.file("c.xml")) << kConditional;
+  std::string input = shared_meshes() + "/real/ogre.obj";
+  std::string mf = MESHFLOW_BINARY;
+  ASSERT_EQ(shell(mf + " run " + dir.file("c.xml") + " " + input + " -o " + dir.file("local.ply") + " 2>/dev/null"), 0);
+  ASSERT_EQ(shell(mf + " run " + dir.file("c.xml") + " " + input + " -o " + dir.file("hub.ply") + " --hub " + hub +
+                  " 2>" + dir.file("hub.err")),
+            0)
+      << slurp(dir.file("hub.err"));
+  ASSERT_EQ(shell(mf + " run " + dir.file("c.xml") + " " + input + " -o " + dir.file("whole.off") + " --hub " + hub +
+                  " --transfer output 2>" + dir.file("whole.err")),
+            0)
+      << slurp(dir.file("whole.err"));
+  // Progress: one line per step, naming the node; the two conditions held on the ogre.
+  std::string progress = slurp(dir.file("hub.err"));
+  EXPECT_NE(progress.find("NumberOfComponents = 44 on http://"), std::string::npos) << progress;
+  EXPECT_NE(progress.find("RemoveSmallestComponents on http://"), std::string::npos) << progress;
+  EXPECT_NE(progress.find("FillHoles on http://"), std::string::npos) << progress;
+  EXPECT_NE(progress.find("sent the correction"), std::string::npos) << progress;
+  EXPECT_NE(slurp(dir.file("whole.err")).find("sent the output"), std::string::npos) << slurp(dir.file("whole.err"));
+  // The same mesh, bit for bit, in-process, through the hub, and with whole-mesh transfers.
+  mesh::Mesh local = mesh::read_mesh(dir.file("local.ply"));
+  EXPECT_EQ(mesh::read_mesh(dir.file("hub.ply")), local);
+  EXPECT_EQ(mesh::read_mesh(dir.file("whole.off")), local);
+  auto m = mesh::compute_measures(local);
+  EXPECT_EQ(m.components, 1u);
+  EXPECT_EQ(m.boundary_loops, 0u);
+  // A workflow the hub refuses: exit 2 with line and column.
+  std::ofstream(dir.file("bad.xml")) << "<workflow><body>\n<atomic><name>Smooth</name></atomic></body></workflow>";
+  EXPECT_EQ(shell(mf + " run " + dir.file("bad.xml") + " " + input + " -o " + dir.file("x.ply") + " --hub " + hub +
+                  " 2>" + dir.file("bad.err")),
+            2);
+  EXPECT_NE(slurp(dir.file("bad.err")).find(":2:"), std::string::npos) << slurp(dir.file("bad.err"));
+}
+
+TEST(Hub, FetchesAnInputUrlOnlyWhereAllowed) {
+  TempDir dir;
+  std::ofstream(dir.file("w.xml")) << kConditional;
+  auto post = [&](const std::string& hub, const std::string& url, const std::string& out) {
+    std::string command = "curl -s -m 60 -o " + dir.file(out) + " -w '%{http_code}' -F workflow=@" + dir.file("w.xml") +
+                          " -F input_url=" + url + " " + hub + "/api/jobs";
+    FILE* pipe = popen(command.c_str(), "r");
+    char code[8] = {0};
+    if (pipe) {
+      std::fgets(code, sizeof code, pipe);
+      pclose(pipe);
+    }
+    return std::string(code);
+  };
+  {
+    // A hub started without --allow-private-fetch refuses loopback, private and non-http URLs.
+    ChildProcess hub_process({MESHFLOW_BINARY, "hub", "--port", "0", "--data", dir.file("strict")});
+    std::string hub = hub_process.ready_url();
+    ASSERT_FALSE(hub.empty());
+    EXPECT_EQ(post(hub, hub + "/api/jobs/0/input", "a.json"), "400");
+    EXPECT_NE(slurp(dir.file("a.json")).find("loopback or private"), std::string::npos) << slurp(dir.file("a.json"));
+    EXPECT_EQ(post(hub, "http://10.1.2.3/mesh.ply", "b.json"), "400");
+    EXPECT_EQ(post(hub, "http://[::1]:9/mesh.ply", "c.json"), "400");
+    EXPECT_EQ(post(hub, "file:///etc/passwd", "d.json"), "400");
+    EXPECT_NE(slurp(dir.file("d.json")).find("http"), std::string::npos) << slurp(dir.file("d.json"));
+  }
+  // With the flag, the hub fetches the URL itself (here: another job's canonical input).
+  ChildProcess up({MESHFLOW_BINARY, "up", "--port", "0", "--data", dir.file("open"), "--allow-private-fetch"});
+  std::string hub = up.ready_url();
+  ASSERT_FALSE(hub.empty());
+  std::string first = submit(hub, dir, kConditional, shared_meshes() + "/defects/elephant-with-holes.off");
+  ASSERT_EQ(wait_for(hub, first)["state"], "done");
+  ASSERT_EQ(post(hub, hub + "/api/jobs/" + first + "/input", "e.json"), "202") << slurp(dir.file("e.json"));
+  std::string second = json::parse(slurp(dir.file("e.json"))).value("id", "");
+  json job = wait_for(hub, second);
+  ASSERT_EQ(job["state"], "done") << job.dump();
+  EXPECT_EQ(job["input_url"], hub + "/api/jobs/" + first + "/input");
+  EXPECT_EQ(job["output_sha256"], wait_for(hub, first)["output_sha256"]);
+  // A URL that is not a mesh: the job fails with a reason.
+  ASSERT_EQ(post(hub, hub + "/healthz", "f.json"), "202");
+  json bad = wait_for(hub, json::parse(slurp(dir.file("f.json"))).value("id", ""));
+  EXPECT_EQ(bad["state"], "failed");
+  EXPECT_NE(bad.value("error", "").find("is not a mesh"), std::string::npos) << bad.dump();
+}
+
+// The node answers every /run with a task URL at once (--answer-within-ms 0): the job only
+// finishes if the engine polls the tasks. Cancelling a job stops its running task.
+TEST(Hub, LongRunsAnswerWithATaskThatTheEnginePollsAndCancelStopsThem) {
+  TempDir dir;
+  ChildProcess hub_process({MESHFLOW_BINARY, "hub", "--port", "0", "--data", dir.file("hub")});
+  std::string hub = hub_process.ready_url();
+  ASSERT_FALSE(hub.empty());
+  std::string token = dir.file("hub") + "/node.token";
+  ChildProcess node({MESHFLOW_BINARY, "node", "--hub", hub, "--token-file", token, "--data", dir.file("n"),
+                     "--answer-within-ms", "0"});
+  std::string node_url = node.ready_url();
+  ASSERT_FALSE(node_url.empty());
+  std::string id = submit(hub, dir, kRepair, shared_meshes() + "/defects/elephant-with-holes.off");
+  json job = wait_for(hub, id);
+  ASSERT_EQ(job["state"], "done") << job.dump();
+  // Straight to the node: 202 and a task that ends with the result.
+  std::string input = hub + "/api/jobs/" + id + "/input";
+  protocol::HttpOptions http;
+  http.bearer_token = slurp(token).substr(0, 64);
+  auto res = protocol::http_request("POST", node_url + "/run/NumberOfBoundaryLoops", json{{"input", input}}.dump(), http);
+  ASSERT_EQ(res.status, 202) << res.describe();
+  std::string task = json::parse(res.body).value("task", "");
+  ASSERT_EQ(task.rfind(node_url + "/tasks/", 0), 0u) << res.body;
+  json state;
+  for (int i = 0; i < 200; ++i) {
+    state = get_json(task);
+    if (state.value("state", "") != "running") break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  EXPECT_EQ(state["state"], "done") << state.dump();
+  EXPECT_EQ(state["result"]["value"], 106);
+
+  // A long smoothing, cancelled while it runs: the job ends as cancelled within seconds, and
+  // progress events showed the step running, then the end.
+  const char* slow = "<workflow><body><atomic><name>LaplacianSmoothing</name><parameters>"
+                     "<parameter>10000</parameter></parameters></atomic></body></workflow>";
+  std::string long_id = submit(hub, dir, slow, shared_meshes() + "/real/igea_tristrips.ply");
+  ASSERT_FALSE(long_id.empty());
+  ChildProcess events({"/usr/bin/curl", "-sN", "-m", "60", "-o", dir.file("events.txt"),
+                       hub + "/api/jobs/" + long_id + "/events"});
+  bool running = false;
+  for (int i = 0; i < 300 && !running; ++i) {
+    json now = get_json(hub + "/api/jobs/" + long_id);
+    running = now.is_object() && !now["steps"].empty() && now["steps"][0]["state"] == "running";
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_TRUE(running);
+  auto cancelled_at = std::chrono::steady_clock::now();
+  EXPECT_EQ(protocol::http_request("DELETE", hub + "/api/jobs/" + long_id).status, 202);
+  json ended = wait_for(hub, long_id, std::chrono::seconds(30));
+  EXPECT_EQ(ended["state"], "cancelled") << ended.dump();
+  EXPECT_LT(std::chrono::steady_clock::now() - cancelled_at, std::chrono::seconds(10));
+  EXPECT_EQ(ended["steps"][0]["state"], "cancelled") << ended.dump();
+  for (int i = 0; i < 100 && slurp(dir.file("events.txt")).find("\"cancelled\"") == std::string::npos; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  events.stop();
+  std::string stream = slurp(dir.file("events.txt"));
+  EXPECT_NE(stream.find("data: {"), std::string::npos) << stream;
+  EXPECT_NE(stream.find("\"state\":\"running\""), std::string::npos) << stream;
+  EXPECT_NE(stream.find("\"state\":\"cancelled\""), std::string::npos) << stream;
+  // The node stopped the smoothing: it answers at once and its task says cancelled.
+  EXPECT_TRUE(protocol::http_request("GET", node_url + "/healthz").ok());
+}
+
+TEST(Hub, ANodeKilledMidStepIsReplacedAndTheJobFinishes) {
+  TempDir dir;
+  ChildProcess hub_process({MESHFLOW_BINARY, "hub", "--port", "0", "--data", dir.file("hub")});
+  std::string hub = hub_process.ready_url();
+  ASSERT_FALSE(hub.empty());
+  std::string token = dir.file("hub") + "/node.token";
+  std::map<std::string, std::unique_ptr<ChildProcess>> nodes;
+  for (const char* name : {"a", "b"}) {
+    auto node = std::make_unique<ChildProcess>(std::vector<std::string>{
+        MESHFLOW_BINARY, "node", "--hub", hub, "--token-file", token, "--data", dir.file(name)});
+    std::string url = node->ready_url();
+    ASSERT_FALSE(url.empty());
+    nodes[url] = std::move(node);
+  }
+  // A check and a long smoothing: the plan puts them on different nodes.
+  const char* xml = "<workflow><body>"
+                    "<if><condition><analysis><name>IsManifold</name></analysis></condition><body/></if>"
+                    "<atomic><name>LaplacianSmoothing</name><parameters><parameter>2000</parameter></parameters></atomic>"
+                    "</body></workflow>";
+  std::string id = submit(hub, dir, xml, shared_meshes() + "/real/dragon_100k.ply");
+  ASSERT_FALSE(id.empty());
+  std::string victim;
+  for (int i = 0; i < 500 && victim.empty(); ++i) {
+    json now = get_json(hub + "/api/jobs/" + id);
+    if (now.is_object())
+      for (const auto& step : now["steps"])
+        if (step["operation"] == "LaplacianSmoothing" && step["state"] == "running") victim = step["node"];
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_TRUE(nodes.count(victim)) << victim;
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // well inside the step
+  nodes[victim]->kill_now();
+  json job = wait_for(hub, id);
+  ASSERT_EQ(job["state"], "done") << job.dump();
+  const json& last = job["steps"].back();
+  EXPECT_EQ(last["operation"], "LaplacianSmoothing");
+  EXPECT_NE(last["node"], victim) << job.dump();
+  // The result is the one an uninterrupted run gives.
+  auto got = protocol::http_download(hub + "/api/jobs/" + id + "/output", dir.file("out.ply"));
+  ASSERT_TRUE(got.ok()) << got.describe();
+  std::ofstream(dir.file("w.xml")) << xml;
+  ASSERT_EQ(shell(std::string(MESHFLOW_BINARY) + " run " + dir.file("w.xml") + " " + shared_meshes() +
+                  "/real/dragon_100k.ply -o " + dir.file("ref.ply") + " 2>/dev/null"),
+            0);
+  EXPECT_EQ(mesh::read_mesh(dir.file("out.ply")), mesh::read_mesh(dir.file("ref.ply")));
+}
+
+// DESIGN §6: a receiver whose corrected mesh does not have the producer's hash fetches the whole
+// output instead, and never keeps the mismatching mesh.
+TEST(Hub, AnUpdateWhoseHashDiffersFallsBackToTheWholeOutput) {
+  TempDir dir;
+  ChildProcess up({MESHFLOW_BINARY, "up", "--port", "0", "--data", dir.file("data")});
+  std::string hub = up.ready_url();
+  ASSERT_FALSE(hub.empty());
+  std::string id = submit(hub, dir, kConditional, shared_meshes() + "/real/kitten.off");
+  ASSERT_EQ(wait_for(hub, id)["state"], "done");
+  json services = get_json(hub + "/api/services")["services"];
+  ASSERT_EQ(services.size(), 2u);
+  std::string a = services[0]["url"], b = services[1]["url"];
+  protocol::HttpOptions http;
+  http.bearer_token = slurp(dir.file("data") + "/node.token").substr(0, 64);
+  std::string input = hub + "/api/jobs/" + id + "/input";
+  // On A: two different results of the same input.
+  auto smooth = json::parse(protocol::http_request("POST", a + "/run/LaplacianSmoothing",
+                                                   json{{"input", input}}.dump(), http).body);
+  auto noisy = json::parse(protocol::http_request("POST", a + "/run/AddNoise",
+                                                  json{{"input", input}, {"params", {{"seed", 7}}}}.dump(), http).body);
+  ASSERT_TRUE(smooth.contains("correction")) << smooth.dump();
+  ASSERT_TRUE(noisy.contains("output")) << noisy.dump();
+  std::string base = smooth["base_sha256"];
+  // B holds the input; it is told that the smoothing's correction yields the noisy mesh.
+  ASSERT_TRUE(protocol::http_request("POST", b + "/download", json{{"url", input}}.dump(), http).ok());
+  auto update = protocol::http_request(
+      "POST", b + "/update",
+      json{{"base", base}, {"correction", smooth["correction"]}, {"result", noisy["output"]},
+           {"result_sha256", noisy["sha256"]}}.dump(),
+      http);
+  ASSERT_EQ(update.status, 202) << update.describe();
+  json entry;
+  for (int i = 0; i < 500; ++i) {
+    entry = get_json(b + "/cache/" + noisy["sha256"].get<std::string>());
+    if (entry.value("state", "") != "pending") break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  EXPECT_EQ(entry["state"], "ready") << entry.dump();
+  EXPECT_EQ(entry["how"], "update-fallback") << entry.dump();
+  EXPECT_NE(entry.value("error", "").find("not the producer's"), std::string::npos) << entry.dump();
+  EXPECT_EQ(entry["bytes"], noisy["output_bytes"].get<std::uint64_t>() + smooth["correction_bytes"].get<std::uint64_t>());
+  // B has the noisy mesh (an analysis runs on it by hash) and never stored the smoothed one.
+  auto count = protocol::http_request("POST", b + "/run/NumberOfVertices",
+                                      json{{"input", noisy["sha256"]}}.dump(), http);
+  EXPECT_TRUE(count.ok()) << count.describe();
+  EXPECT_EQ(protocol::http_request("GET", b + "/cache/" + smooth["sha256"].get<std::string>()).status, 404);
+  // Nodes fetch only from the hub and registered nodes; their routes need the node token, and
+  // so does registering with the hub.
+  auto stranger = protocol::http_request("POST", b + "/download", json{{"url", "http://127.0.0.2:9/m.ply.zst"}}.dump(), http);
+  EXPECT_EQ(stranger.status, 403) << stranger.describe();
+  EXPECT_NE(stranger.body.find("refusing to fetch from http://127.0.0.2:9"), std::string::npos) << stranger.body;
+  EXPECT_EQ(protocol::http_request("POST", b + "/download", json{{"url", input}}.dump()).status, 401);
+  EXPECT_EQ(protocol::http_request("POST", hub + "/api/services", json{{"url", b}}.dump()).status, 401);
 }
 
 }  // namespace
