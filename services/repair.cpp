@@ -88,7 +88,9 @@ bool remove_duplicate_triangles(EditMesh& m) {
       if (auto it = uses.find(edge_key(t[k], t[(k + 1) % 3])); it != uses.end() && t[k] != t[(k + 1) % 3])
         it->second++;
   bool changed = false;
-  for (auto& [key, ids] : groups) {
+  for (auto& group : groups) {
+    const auto& key = group.first;  // named, not bound: lambdas may not capture bindings before C++20 in clang 14
+    auto& ids = group.second;
     auto opened = [&](std::uint32_t removed) {
       int count = 0;
       for (int k = 0; k < 3; ++k) {
