@@ -10,6 +10,7 @@
 #include "mesh/errors.h"
 #include "web/hub_server.h"
 #include "web/node_supervisor.h"
+#include "web/repository_routes.h"
 
 namespace meshflow::apps {
 namespace {
@@ -50,6 +51,9 @@ void announce(const web::HubServer& hub) {
 int run_hub(const HubArgs& args) {
   block_stop_signals();
   web::HubServer hub(hub_options(args));
+  // The store opens and the examples load before the server starts: ready means loaded.
+  repository::Repository repo(args.data);
+  web::add_repository_routes(hub, repo);
   hub.start();
   announce(hub);
   wait_for_stop_signal();
@@ -61,6 +65,8 @@ int run_up(const HubArgs& args) {
   if (args.nodes < 0) throw InvalidInput("--nodes must be >= 0");
   block_stop_signals();
   web::HubServer hub(hub_options(args));
+  repository::Repository repo(args.data);
+  web::add_repository_routes(hub, repo);
   hub.start();
   std::size_t expected = static_cast<std::size_t>(args.nodes);
   hub.set_ready_condition(

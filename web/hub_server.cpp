@@ -67,6 +67,7 @@ struct HubServer::Impl {
   std::unique_ptr<ServiceRegistry> services;
   std::unique_ptr<JobManager> jobs;
   std::function<bool()> ready_condition;
+  std::function<std::optional<std::string>(const std::string&)> workflow_resolver;
   std::atomic<std::uint64_t> requests{0};
   std::atomic<std::size_t> registrations{0};  // since this start
 
@@ -181,6 +182,14 @@ struct HubServer::Impl {
         discard();
         throw InvalidInput("the upload was cut short or exceeds the limit");
       }
+      if (!fields.count("workflow") && fields.count("workflow_id") && workflow_resolver) {
+        auto xml = workflow_resolver(fields["workflow_id"]);
+        if (!xml) {
+          discard();
+          throw protocol::NotFound("no workflow " + fields["workflow_id"] + " in the repository");
+        }
+        fields["workflow"] = *xml;
+      }
       if (!fields.count("workflow")) {
         discard();
         throw InvalidInput("missing the 'workflow' field (the workflow XML)");
@@ -188,6 +197,7 @@ struct HubServer::Impl {
       JobRequest request;
       request.id = id;
       request.workflow_xml = fields["workflow"];
+      if (fields.count("workflow_id")) request.workflow_id = fields["workflow_id"];
       if (upload_bytes > 0) request.upload = upload;
       else std::filesystem::remove(upload);
       request.input_url = fields["input_url"];
@@ -294,6 +304,10 @@ void HubServer::stop() {
 
 std::string HubServer::url() const { return impl_->url(); }
 std::filesystem::path HubServer::token_file() const { return impl_->options.data_dir / "node.token"; }
+void HubServer::set_workflow_resolver(
+    std::function<std::optional<std::string>(const std::string&)> resolver) {
+  impl_->workflow_resolver = std::move(resolver);
+}
 void HubServer::set_ready_condition(std::function<bool()> condition) {
   impl_->ready_condition = std::move(condition);
 }

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace httplib {
@@ -50,6 +51,9 @@ class HubServer {
   std::size_t registrations_since_start() const;  // node registrations since start()
 
   httplib::Server& http();  // for the layers that add routes
+
+  // How POST /api/jobs turns a `workflow_id` into workflow XML (the repository sets it).
+  void set_workflow_resolver(std::function<std::optional<std::string>(const std::string&)> resolver);
 
  private:
   struct Impl;

@@ -1,0 +1,393 @@
+#include "repository/repository.h"
+
+#include <algorithm>
+#include <chrono>
+#include <ctime>
+#include <fstream>
+#include <random>
+#include <set>
+#include <sstream>
+
+#include "engine/validate.h"
+#include "engine/workflow_parser.h"
+#include "mesh/errors.h"
+#include "repository/embedded.h"
+#include "services/operation.h"
+
+namespace meshflow::repository {
+namespace {
+
+const std::string kRdfType = "http://www.w3.org/1999/02/22-rdf-syntax-ns#type";
+const std::string kXsdDateTime = "http://www.w3.org/2001/XMLSchema#dateTime";
+const std::string kPrefixes =
+    "PREFIX wo: <http://meshflow.org/ontology/wo#>\n"
+    "PREFIX rdfs: <http://www.w3.org/2000/01/rdf-schema#>\n";
+
+std::string wo(const std::string& local) { return std::string(kWo) + local; }
+std::string local_name(const std::string& uri) {
+  auto cut = uri.find_last_of("#/");
+  return cut == std::string::npos ? uri : uri.substr(cut + 1);
+}
+bool is_identifier(const std::string& s) {
+  return !s.empty() && s.size() <= 128 &&
+         std::all_of(s.begin(), s.end(), [](unsigned char c) {
+           return std::isalnum(c) || c == '_' || c == '-' || c == '.';
+         });
+}
+std::string now_utc() {
+  auto t = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+std::string fresh_id() {
+  static thread_local std::mt19937_64 rng{std::random_device{}()};
+  std::ostringstream s;
+  s << std::hex << rng();
+  return s.str();
+}
+std::string lower(std::string s) {
+  for (auto& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+// The words of a free-text query, lowercased, with nothing that could leave a SPARQL string.
+std::vector<std::string> words(const std::string& q) {
+  std::vector<std::string> out;
+  std::string cur;
+  for (unsigned char c : q) {
+    if (std::isalnum(c) || c >= 0x80 || c == '-' || c == '_') {
+      cur += static_cast<char>(std::tolower(c));
+    } else if (!cur.empty()) {
+      out.push_back(cur);
+      cur.clear();
+    }
+  }
+  if (!cur.empty()) out.push_back(cur);
+  if (out.size() > 8) out.resize(8);
+  return out;
+}
+std::size_t count_of(const std::string& hay, const std::string& needle) {
+  std::size_t n = 0;
+  for (auto p = hay.find(needle); p != std::string::npos; p = hay.find(needle, p + 1)) ++n;
+  return n;
+}
+
+struct Example {
+  const char* id;
+  const char* file;
+  const char* xml;
+  const char* name;
+  const char* description;
+  std::vector<std::string> domains;
+};
+
+std::vector<Example> examples() {
+  return {
+      {"mesh-repairing", "mesh_repairing.xml", embedded::kMeshRepairing, "Mesh Repairing",
+       "The thesis's repair pipeline: keeps the largest connected component, smooths with two "
+       "Laplacian steps, fills every hole and removes the degenerate triangles left behind.",
+       {"HoleFilling", "Smoothing"}},
+      {"conditional-repair", "conditional_repair.xml", embedded::kConditionalRepair,
+       "Conditional mesh repair",
+       "Repairs only what is wrong: removes small components when there is more than one, "
+       "fills holes when boundary loops remain, otherwise removes degenerate triangles.",
+       {"Cleaning", "HoleFilling"}},
+      {"smoothing-loop", "smoothing_loop.xml", embedded::kSmoothingLoop, "Smoothing loop",
+       "Applies one Laplacian smoothing step at a time while the average normal instability "
+       "stays above 10 degrees (bounded by the hub's loop limit).",
+       {"Smoothing"}},
+      {"simplification", "simplification.xml", embedded::kSimplification,
+       "Mesh simplification",
+       "Quadric edge-collapse simplification within a maximum error of 0.5% of the diagonal; "
+       "large meshes are split into parts and simplified on several nodes (thesis ch. 9).",
+       {"Simplification"}},
+  };
+}
+
+}  // namespace
+
+struct Repository::Impl {
+  std::filesystem::path dir;
+  std::unique_ptr<RdfStore> store;
+  std::map<std::string, std::string> purpose_parent;  // local name -> parent ("" = root)
+  std::map<std::string, std::string> purpose_label;
+  std::vector<std::string> datatypes;
+  std::map<std::string, std::vector<std::string>> takes, gives;  // operation -> types
+  std::size_t examples_loaded = 0;
+
+  std::filesystem::path xml_path(const std::string& id) const {
+    return dir / "workflows" / (id + ".xml");
+  }
+
+  void load_ontology_maps() {
+    auto sub = store->query(kPrefixes +
+                            "SELECT ?c ?p ?l WHERE { ?c rdfs:subClassOf ?p . ?c rdfs:label ?l }");
+    std::map<std::string, std::string> parent;
+    for (auto& row : sub.rows) {
+      auto c = local_name(row[0].value);
+      parent[c] = local_name(row[1].value);
+      purpose_label[c] = row[2].value;
+    }
+    auto under = [&](std::string c, const std::string& root) {
+      for (int guard = 0; guard < 64 && parent.count(c); ++guard) {
+        c = parent[c];
+        if (c == root) return true;
+      }
+      return false;
+    };
+    for (auto& [c, p] : parent) {
+      if (under(c, "Purpose")) purpose_parent[c] = p == "Purpose" ? "" : p;
+      if (under(c, "DataType")) datatypes.push_back(c);
+    }
+    for (const char* prop : {"takes", "gives"}) {
+      auto r = store->query(kPrefixes + "SELECT ?o ?t WHERE { ?o wo:" + prop + " ?t }");
+      auto& map = std::string(prop) == "takes" ? takes : gives;
+      for (auto& row : r.rows) map[local_name(row[0].value)].push_back(local_name(row[1].value));
+    }
+  }
+
+  // The purpose and every super-purpose (the closure written at insert, DESIGN §7).
+  std::vector<std::string> closure(const std::vector<std::string>& domains) const {
+    std::set<std::string> all;
+    for (auto d : domains) {
+      for (int guard = 0; guard < 64 && !d.empty(); ++guard) {
+        all.insert(d);
+        auto it = purpose_parent.find(d);
+        d = it == purpose_parent.end() ? "" : it->second;
+      }
+    }
+    return {all.begin(), all.end()};
+  }
+  // The most specific purposes of a closure (those no other member lies under).
+  std::vector<std::string> most_specific(const std::vector<std::string>& all) const {
+    std::set<std::string> ancestors;
+    for (const auto& d : all) {
+      auto it = purpose_parent.find(d);
+      for (int guard = 0; guard < 64 && it != purpose_parent.end() && !it->second.empty();
+           ++guard) {
+        ancestors.insert(it->second);
+        it = purpose_parent.find(it->second);
+      }
+    }
+    std::vector<std::string> out;
+    for (const auto& d : all)
+      if (!ancestors.count(d)) out.push_back(d);
+    return out;
+  }
+
+  std::string store_workflow(const NewWorkflow& w) {
+    if (w.name.empty() || w.name.size() > 200)
+      throw InvalidInput("a workflow needs a name of 1 to 200 characters");
+    if (w.description.size() > 10000)
+      throw InvalidInput("the description is longer than 10000 characters");
+    if (w.type != "executable" && w.type != "static")
+      throw InvalidInput("type must be \"executable\" or \"static\", not \"" + w.type + "\"");
+    if (w.domains.empty()) throw InvalidInput("a workflow needs at least one purpose (domains)");
+    for (const auto& d : w.domains)
+      if (!purpose_parent.count(d)) throw InvalidInput("unknown purpose \"" + d + "\"");
+    if (!is_identifier(w.creator)) throw InvalidInput("a workflow needs a creator");
+    std::vector<std::string> ops = w.operations;
+    if (w.type == "executable" || !w.xml.empty()) {
+      if (w.xml.empty()) throw InvalidInput("an executable workflow needs its xml");
+      auto parsed = engine::parse_workflow(w.xml, "workflow.xml");
+      engine::validate_workflow(parsed, "workflow.xml", services::operation_specs());
+      ops = engine::operations_used(parsed);
+    }
+    for (const auto& op : ops)
+      if (!is_identifier(op)) throw InvalidInput("bad operation name \"" + op + "\"");
+    std::string id = w.id.empty() ? fresh_id() : w.id;
+    std::string s = std::string(kWorkflowBase) + id;
+    std::vector<Triple> t;
+    auto lit = [&](const std::string& p, const std::string& v, const std::string& dt = "") {
+      t.push_back({s, wo(p), v, true, dt});
+    };
+    auto res = [&](const std::string& p, const std::string& o) { t.push_back({s, p, o}); };
+    res(kRdfType, wo("Workflow"));
+    res(kRdfType, wo(w.type == "static" ? "WorkflowStatic" : "WorkflowExecutable"));
+    lit("name", w.name);
+    lit("description", w.description);
+    lit("created", now_utc(), kXsdDateTime);
+    res(wo("creator"), std::string(kUserBase) + w.creator);
+    for (const auto& d : closure(w.domains)) res(wo("workflowDomain"), wo(d));
+    std::set<std::string> seen;
+    for (const auto& op : ops)
+      if (seen.insert(op).second) res(wo("usesOperation"), wo(op));
+    // Data: what the first operation takes, what the last gives.
+    if (!ops.empty()) {
+      for (const auto& ty : takes[ops.front()]) res(wo("inputType"), wo(ty));
+      for (const auto& ty : gives[ops.back()]) res(wo("outputType"), wo(ty));
+    }
+    if (!w.xml.empty()) {
+      std::filesystem::create_directories(dir / "workflows");
+      auto path = xml_path(id);
+      std::ofstream out(path, std::ios::binary);
+      out << w.xml;
+      if (!out.flush()) throw IoError("cannot write " + path.string());
+      lit("xmlFile", "workflows/" + id + ".xml");
+    }
+    store->add(t);
+    return id;
+  }
+
+  WorkflowSummary summary(const std::string& id, const std::string& name,
+                          const std::string& description, const std::string& created) {
+    WorkflowSummary s{id, name, description, "", created, {}, "executable"};
+    auto r = store->query(kPrefixes + "SELECT ?p ?o WHERE { <" + kWorkflowBase + id +
+                          "> ?p ?o }");
+    std::vector<std::string> domains;
+    for (auto& row : r.rows) {
+      auto p = local_name(row[0].value);
+      if (p == "creator") s.creator = local_name(row[1].value);
+      if (p == "workflowDomain") domains.push_back(local_name(row[1].value));
+      if (p == "type" && local_name(row[1].value) == "WorkflowStatic") s.type = "static";
+    }
+    s.domains = most_specific(domains);
+    return s;
+  }
+};
+
+Repository::Repository(const std::filesystem::path& data_dir) : impl_(std::make_unique<Impl>()) {
+  impl_->dir = data_dir / "repository";
+  impl_->store = std::make_unique<RdfStore>(impl_->dir);
+  bool first = impl_->store->created_now();
+  if (first) impl_->store->load_rdfxml(embedded::kOntology, "http://meshflow.org/ontology/wo");
+  impl_->load_ontology_maps();
+  if (first) {
+    for (const auto& e : examples()) {
+      NewWorkflow w{e.name, e.description, "meshflow", e.domains, "executable", e.xml, {}, e.id};
+      impl_->store_workflow(w);
+      ++impl_->examples_loaded;
+    }
+  } else {
+    impl_->examples_loaded = examples().size();
+  }
+}
+
+Repository::~Repository() = default;
+
+const char* ontology_rdfxml() { return embedded::kOntology; }
+
+RdfStore& Repository::store() { return *impl_->store; }
+std::size_t Repository::example_count() const { return impl_->examples_loaded; }
+
+std::string Repository::create(const NewWorkflow& workflow) {
+  NewWorkflow w = workflow;
+  w.id.clear();
+  return impl_->store_workflow(w);
+}
+
+std::optional<WorkflowDetail> Repository::get(const std::string& id) {
+  if (!is_identifier(id)) return std::nullopt;
+  auto r = impl_->store->query(kPrefixes + "SELECT ?p ?o WHERE { <" + kWorkflowBase + id +
+                               "> ?p ?o }");
+  if (r.rows.empty()) return std::nullopt;
+  WorkflowDetail d;
+  d.id = id;
+  d.type = "executable";
+  std::vector<std::string> domains;
+  for (auto& row : r.rows) {
+    auto p = local_name(row[0].value);
+    auto o = row[1].value;
+    if (p == "name") d.name = o;
+    else if (p == "description") d.description = o;
+    else if (p == "created") d.created = o;
+    else if (p == "creator") d.creator = local_name(o);
+    else if (p == "workflowDomain") domains.push_back(local_name(o));
+    else if (p == "usesOperation") d.operations.push_back(local_name(o));
+    else if (p == "inputType") d.inputs.push_back(local_name(o));
+    else if (p == "outputType") d.outputs.push_back(local_name(o));
+    else if (p == "type" && local_name(o) == "WorkflowStatic") d.type = "static";
+  }
+  d.domains = impl_->most_specific(domains);
+  return d;
+}
+
+std::optional<std::string> Repository::xml(const std::string& id) {
+  if (!is_identifier(id)) return std::nullopt;
+  std::ifstream in(impl_->xml_path(id), std::ios::binary);
+  if (!in) return std::nullopt;
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+bool Repository::remove(const std::string& id) {
+  if (!get(id)) return false;
+  impl_->store->remove_subject(std::string(kWorkflowBase) + id);
+  std::error_code ec;
+  std::filesystem::remove(impl_->xml_path(id), ec);
+  return true;
+}
+
+SearchPage Repository::search(const SearchQuery& q) {
+  // One basic graph pattern, FILTER last (GROUND.md §1): rasqal joins it in one pass.
+  std::string cls = "Workflow";
+  if (q.type == "static") cls = "WorkflowStatic";
+  else if (q.type == "executable") cls = "WorkflowExecutable";
+  else if (!q.type.empty())
+    throw InvalidInput("type must be static or executable, not \"" + q.type + "\"");
+  std::string where = "?w a wo:" + cls + " .\n";
+  auto filter = [&](const std::string& value, const char* what, const std::string& pattern) {
+    if (value.empty()) return;
+    if (!is_identifier(value)) throw InvalidInput(std::string("bad ") + what + " \"" + value + "\"");
+    where += pattern + " .\n";
+  };
+  if (!q.domain.empty() && !impl_->purpose_parent.count(q.domain))
+    throw InvalidInput("unknown purpose \"" + q.domain + "\"");
+  filter(q.domain, "domain", "?w wo:workflowDomain wo:" + q.domain);
+  filter(q.input, "input", "?w wo:inputType wo:" + q.input);
+  filter(q.output, "output", "?w wo:outputType wo:" + q.output);
+  filter(q.operation, "operation", "?w wo:usesOperation wo:" + q.operation);
+  filter(q.creator, "creator", "?w wo:creator <" + std::string(kUserBase) + q.creator + ">");
+  where += "?w wo:name ?n ; wo:description ?d ; wo:created ?c .\n";
+  auto terms = words(q.q);
+  if (!terms.empty()) {
+    where += "FILTER(";
+    for (std::size_t i = 0; i < terms.size(); ++i) {
+      if (i) where += " && ";
+      where += "(CONTAINS(LCASE(?n), \"" + terms[i] + "\") || CONTAINS(LCASE(?d), \"" +
+               terms[i] + "\"))";
+    }
+    where += ")\n";
+  }
+  auto r = impl_->store->query(kPrefixes + "SELECT ?w ?n ?d ?c WHERE {\n" + where + "}");
+  struct Hit { double score; std::string created; std::size_t row; };
+  std::vector<Hit> hits;
+  for (std::size_t i = 0; i < r.rows.size(); ++i) {
+    double score = 0;
+    auto n = lower(r.rows[i][1].value), d = lower(r.rows[i][2].value);
+    for (const auto& t : terms) score += 3.0 * count_of(n, t) + count_of(d, t);
+    hits.push_back({score, r.rows[i][3].value, i});
+  }
+  std::sort(hits.begin(), hits.end(), [](const Hit& a, const Hit& b) {
+    if (a.score != b.score) return a.score > b.score;
+    if (a.created != b.created) return a.created > b.created;
+    return a.row < b.row;
+  });
+  SearchPage page;
+  page.total = hits.size();
+  page.offset = q.offset;
+  page.limit = std::min<std::uint64_t>(q.limit, 200);
+  for (auto i = q.offset; i < hits.size() && i < q.offset + page.limit; ++i) {
+    auto& row = r.rows[hits[i].row];
+    page.workflows.push_back(impl_->summary(local_name(row[0].value), row[1].value,
+                                            row[2].value, row[3].value));
+  }
+  return page;
+}
+
+std::vector<Purpose> Repository::purposes() const {
+  std::vector<Purpose> out;
+  for (const auto& [name, parent] : impl_->purpose_parent) {
+    Purpose p{name, impl_->purpose_label.count(name) ? impl_->purpose_label.at(name) : name, {}};
+    if (!parent.empty()) p.parent = parent;
+    out.push_back(p);
+  }
+  return out;
+}
+
+std::vector<std::string> Repository::datatypes() const { return impl_->datatypes; }
+
+}  // namespace meshflow::repository

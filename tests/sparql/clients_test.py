@@ -1,0 +1,140 @@
+#!/usr/bin/python3
+"""Real SPARQL clients (SPARQLWrapper, rdflib's SPARQLStore, roqet -p) and raw HTTP against a
+started `meshflow hub`; bad input included. Usage: clients_test.py MESHFLOW_BINARY.
+The hub is stopped on every exit path; the whole test is bounded to 120 s."""
+import json, os, shutil, signal, subprocess, sys, tempfile, time, urllib.error, urllib.parse, urllib.request
+
+signal.alarm(120)
+binary = sys.argv[1]
+data = tempfile.mkdtemp(prefix="mf-sparql-")
+hub = subprocess.Popen([binary, "hub", "--port", "0", "--data", data],
+                       stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+failures = []
+
+def check(ok, what):
+    print(("ok   " if ok else "FAIL ") + what, flush=True)
+    if not ok:
+        failures.append(what)
+
+def http(method, path, body=None, headers=None):
+    req = urllib.request.Request(url + path, data=body, method=method, headers=headers or {})
+    try:
+        with urllib.request.urlopen(req, timeout=30) as r:
+            return r.status, r.headers.get("Content-Type", ""), r.read()
+    except urllib.error.HTTPError as e:
+        return e.code, e.headers.get("Content-Type", ""), e.read()
+
+try:
+    line = hub.stdout.readline()
+    check(line.startswith("meshflow: ready at "), "hub ready line: " + line.strip())
+    url = line.split()[-1]
+    endpoint = url + "/sparql"
+    wo = "PREFIX wo: <http://meshflow.org/ontology/wo#>\n"
+
+    from SPARQLWrapper import SPARQLWrapper, JSON, XML, CSV, TSV, TURTLE
+    s = SPARQLWrapper(endpoint)
+    s.setQuery(wo + "SELECT ?w ?n WHERE { ?w a wo:WorkflowExecutable ; wo:name ?n }")
+    s.setReturnFormat(JSON)
+    rows = s.query().convert()["results"]["bindings"]
+    check(len(rows) == 4, f"SPARQLWrapper JSON: {len(rows)} executable workflows (want 4)")
+    s.setReturnFormat(XML)
+    check(len(s.query().convert().getElementsByTagName("result")) == 4, "SPARQLWrapper XML")
+    s.setReturnFormat(CSV)
+    csv = s.query().convert().decode().strip().splitlines()
+    check(csv[0].strip() == "w,n" and len(csv) == 5, "SPARQLWrapper CSV")
+    s.setReturnFormat(TSV)
+    check(len(s.query().convert().decode().strip().splitlines()) == 5, "SPARQLWrapper TSV")
+    s.setMethod("POST")
+    s.setReturnFormat(JSON)
+    check(len(s.query().convert()["results"]["bindings"]) == 4, "SPARQLWrapper POST form")
+    s2 = SPARQLWrapper(endpoint)
+    s2.setQuery(wo + "CONSTRUCT { ?w wo:name ?n } WHERE { ?w a wo:WorkflowExecutable ; wo:name ?n }")
+    s2.setReturnFormat(TURTLE)
+    ttl = s2.query().convert()
+    check(b"Mesh Repairing" in ttl, "SPARQLWrapper CONSTRUCT as Turtle")
+    s2.setQuery("ASK { ?s ?p ?o }")
+    s2.setReturnFormat(JSON)
+    check(s2.query().convert().get("boolean") is True, "ASK as JSON")
+
+    import rdflib
+    from rdflib.plugins.stores.sparqlstore import SPARQLStore
+    g = rdflib.Graph(store=SPARQLStore(endpoint, returnFormat="json"))
+    n = len(list(g.query("SELECT ?s WHERE { ?s ?p ?o } LIMIT 5")))
+    check(n == 5, f"rdflib SPARQLStore: {n} rows (want 5)")
+
+    roqet = subprocess.run(["roqet", "-q", "-p", endpoint, "-r", "csv", "-e",
+                            wo + "SELECT ?n WHERE { ?w wo:name ?n ; wo:workflowDomain wo:Repair }"],
+                           capture_output=True, text=True, timeout=30)
+    check(roqet.returncode == 0 and "Mesh Repairing" in roqet.stdout,
+          f"roqet -p (rc {roqet.returncode}): {roqet.stderr.strip()[:120]}")
+
+    # Raw protocol and bad input.
+    q = urllib.parse.quote("SELECT ?s WHERE { ?s ?p ?o } LIMIT 1")
+    code, ctype, _ = http("GET", "/sparql?query=" + q, headers={
+        "Accept": "application/sparql-results+xml;q=0.9, application/sparql-results+json;q=0.3"})
+    check(code == 200 and "xml" in ctype, f"q-weighted Accept picks XML ({ctype})")
+    code, _, _ = http("POST", "/sparql", b"SELECT ?s WHERE { ?s ?p ?o } LIMIT 1",
+                      {"Content-Type": "application/sparql-query"})
+    check(code == 200, "POST application/sparql-query")
+    code, _, _ = http("GET", "/sparql?query=" + q, headers={"Accept": "image/png"})
+    check(code == 406, f"unacceptable Accept -> 406 (got {code})")
+    code, _, body = http("POST", "/sparql", b"INSERT DATA { <urn:a> <urn:b> <urn:c> }",
+                         {"Content-Type": "application/sparql-update"})
+    check(code == 403, f"update refused (got {code})")
+    code, _, body = http("POST", "/sparql", b"query=" + urllib.parse.quote("DELETE WHERE { ?s ?p ?o }").encode(),
+                         {"Content-Type": "application/x-www-form-urlencoded"})
+    check(code == 403, f"update in the query field refused (got {code})")
+    code, _, body = http("GET", "/sparql?query=" + urllib.parse.quote("SELEC ?x WHERE"))
+    check(code == 400 and "error" in json.loads(body), f"syntax error -> 400 JSON (got {code})")
+    code, _, body = http("GET", "/sparql?query=" + urllib.parse.quote(
+        "SELECT ?c WHERE { ?c <http://www.w3.org/2000/01/rdf-schema#subClassOf>* ?p }"))
+    check(code == 400, f"property path -> 400 (got {code}) {body[:100]}")
+    code, _, body = http("GET", "/sparql?query=" + urllib.parse.quote(
+        "SELECT * WHERE { ?a ?b ?c . ?d ?e ?f }"))
+    check(code == 413 and b"rows" in body, f"too many rows -> 413, no silent truncation (got {code})")
+    code, _, _ = http("POST", "/sparql", b"SELECT * WHERE { ?s ?p ?o } #" + b"x" * (2 << 20),
+                      {"Content-Type": "application/sparql-query"})
+    check(code == 413, f"oversized body -> 413 (got {code})")
+    code, _, body = http("GET", "/sparql?query=" + urllib.parse.quote(
+        "SELECT * WHERE { ?a ?b ?c . ?d ?e ?f . ?g ?h ?i . ?j ?k ?l } LIMIT 100000000"))
+    check(code in (413, 503), f"a query that runs too long is stopped (got {code}) {body[:100]}")
+
+    # Search and the workflow routes.
+    code, _, body = http("GET", "/api/workflows?domain=Repair")
+    names = [w["name"] for w in json.loads(body)["workflows"]]
+    check(code == 200 and "Mesh Repairing" in names, f"domain=Repair finds Mesh Repairing: {names}")
+    code, _, body = http("GET", "/api/workflows?q=repair&limit=1")
+    d = json.loads(body)
+    check(d["total"] >= 2 and len(d["workflows"]) == 1 and d["workflows"][0]["id"] == "mesh-repairing",
+          f"q=repair ranked and paged: {d}")
+    code, _, body = http("GET", "/api/workflows?domain=Nope")
+    check(code == 400, f"unknown domain -> 400 (got {code})")
+    code, _, body = http("GET", "/api/workflows?limit=abc")
+    check(code == 400, f"bad limit -> 400 (got {code})")
+    code, _, body = http("GET", "/api/workflows/mesh-repairing")
+    d = json.loads(body)
+    check(code == 200 and d["inputs"] == ["TriangleMesh"] and len(d["operations"]) == 4, f"workflow detail {d}")
+    code, ctype, body = http("GET", "/api/workflows/mesh-repairing/xml")
+    check(code == 200 and b"FillHoles" in body and "xml" in ctype, "workflow XML")
+    code, _, body = http("GET", "/api/domains")
+    doms = {x["name"]: x["parent"] for x in json.loads(body)["domains"]}
+    check(doms.get("HoleFilling") == "Repair" and doms.get("Repair") is None, "GET /api/domains")
+    code, _, body = http("GET", "/api/datatypes")
+    check("TriangleMesh" in json.loads(body)["datatypes"], "GET /api/datatypes")
+    code, ctype, body = http("GET", "/ontology/wo")
+    check(code == 200 and b"WorkflowExecutable" in body, "GET /ontology/wo")
+    code, _, _ = http("DELETE", "/api/workflows/mesh-repairing")
+    check(code in (401, 403), f"anonymous delete refused (got {code})")
+    code, _, _ = http("GET", "/api/workflows/mesh-repairing")
+    check(code == 200, "the example is still there")
+finally:
+    hub.send_signal(signal.SIGTERM)
+    try:
+        hub.wait(timeout=15)
+    except subprocess.TimeoutExpired:
+        hub.kill()
+        hub.wait()
+    shutil.rmtree(data, ignore_errors=True)
+
+if failures:
+    sys.exit(f"{len(failures)} failed: {failures}")
