@@ -53,7 +53,10 @@ int run_hub(const HubArgs& args) {
   web::HubServer hub(hub_options(args));
   // The store opens and the examples load before the server starts: ready means loaded.
   repository::Repository repo(args.data);
-  web::add_repository_routes(hub, repo);
+  repository::Accounts accounts(args.data, repo);
+  web::Auth auth(accounts);
+  web::add_account_routes(hub, auth);
+  web::add_repository_routes(hub, repo, auth);
   hub.start();
   announce(hub);
   wait_for_stop_signal();
@@ -66,7 +69,10 @@ int run_up(const HubArgs& args) {
   block_stop_signals();
   web::HubServer hub(hub_options(args));
   repository::Repository repo(args.data);
-  web::add_repository_routes(hub, repo);
+  repository::Accounts accounts(args.data, repo);
+  web::Auth auth(accounts);
+  web::add_account_routes(hub, auth);
+  web::add_repository_routes(hub, repo, auth);
   hub.start();
   std::size_t expected = static_cast<std::size_t>(args.nodes);
   hub.set_ready_condition(

@@ -76,8 +76,65 @@ void answer_sparql(repository::RdfStore& store, const SparqlLimits& limits,
 
 }  // namespace
 
-void add_repository_routes(HubServer& hub, repository::Repository& repo, SparqlLimits limits) {
+void add_repository_routes(HubServer& hub, repository::Repository& repo, Auth& auth,
+                           SparqlLimits limits) {
   auto& server = hub.http();
+  server.Post("/api/workflows", [&repo, &auth, limits](const httplib::Request& req,
+                                                       httplib::Response& res) {
+    check_body(req, limits.max_body);
+    auto who = auth.require(req, "user");
+    json j;
+    try {
+      j = json::parse(req.body);
+    } catch (const json::parse_error& e) {
+      throw InvalidInput(std::string("the body is not JSON: ") + e.what());
+    }
+    if (!j.is_object()) throw InvalidInput("the body must be a JSON object");
+    auto str = [&](const char* k) {
+      if (!j.contains(k)) return std::string();
+      if (!j[k].is_string()) throw InvalidInput(std::string("\"") + k + "\" must be a string");
+      return j[k].get<std::string>();
+    };
+    auto list = [&](const char* k) {
+      std::vector<std::string> out;
+      if (!j.contains(k)) return out;
+      if (!j[k].is_array()) throw InvalidInput(std::string("\"") + k + "\" must be a list of names");
+      for (auto& v : j[k]) {
+        if (!v.is_string()) throw InvalidInput(std::string("\"") + k + "\" must be a list of names");
+        out.push_back(v.get<std::string>());
+      }
+      return out;
+    };
+    repository::NewWorkflow w;
+    w.name = str("name");
+    w.description = str("description");
+    w.domains = list("domains");
+    w.xml = str("xml");
+    w.operations = list("operations");
+    w.type = j.contains("type") ? str("type") : "executable";
+    w.creator = who.name;
+    if (w.type == "static" && repository::role_rank(who.role) < repository::role_rank("curator"))
+      throw protocol::Forbidden("static (documentation) workflows are filed by curators");
+    auto id = repo.create(w);
+    auto d = repo.get(id);
+    json out = summary_json(*d);
+    out["operations"] = d->operations;
+    out["inputs"] = d->inputs;
+    out["outputs"] = d->outputs;
+    res.status = 201;
+    res.set_content(out.dump(), "application/json");
+  });
+  server.Delete(R"(/api/workflows/([A-Za-z0-9_.-]+))",
+                [&repo, &auth](const httplib::Request& req, httplib::Response& res) {
+                  auto who = auth.require(req, "user");
+                  auto w = repo.get(req.matches[1]);
+                  if (!w) throw protocol::NotFound("no workflow " + std::string(req.matches[1]));
+                  if (w->creator != who.name &&
+                      repository::role_rank(who.role) < repository::role_rank("curator"))
+                    throw protocol::Forbidden("only its creator or a curator deletes a workflow");
+                  repo.remove(w->id);
+                  res.status = 204;
+                });
   server.Get("/api/workflows", [&repo](const httplib::Request& req, httplib::Response& res) {
     repository::SearchQuery q;
     auto text = [&](const char* name) {

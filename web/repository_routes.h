@@ -3,6 +3,7 @@
 // the purpose taxonomy and data types, the ontology document and the SPARQL endpoint.
 
 #include "repository/repository.h"
+#include "web/account_routes.h"
 #include "web/hub_server.h"
 
 namespace meshflow::web {
@@ -13,7 +14,7 @@ struct SparqlLimits {
   std::size_t max_body = 1 << 20;  // query text and workflow JSON
 };
 
-void add_repository_routes(HubServer& hub, repository::Repository& repo,
+void add_repository_routes(HubServer& hub, repository::Repository& repo, Auth& auth,
                            SparqlLimits limits = {});
 
 }  // namespace meshflow::web

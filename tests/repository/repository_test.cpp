@@ -79,8 +79,11 @@ TEST_F(RepositoryTest, FiltersByOperationTypeCreatorAndKind) {
   ASSERT_EQ(page.total, 1u);
   EXPECT_EQ(page.workflows[0].id, "simplification");
   q = {};
-  q.output = "ClosedTriangleMesh";
+  q.input = "TriangleMesh";
   EXPECT_TRUE(finds(q, "mesh-repairing"));
+  q = {};
+  q.output = "HeightField";
+  EXPECT_EQ(repo->search(q).total, 0u);
   q = {};
   q.type = "static";
   EXPECT_EQ(repo->search(q).total, 0u);

@@ -7,6 +7,11 @@ import json, os, shutil, signal, subprocess, sys, tempfile, time, urllib.error, 
 signal.alarm(120)
 binary = sys.argv[1]
 data = tempfile.mkdtemp(prefix="mf-sparql-")
+# The first curator comes from the shell, before the hub starts.
+add = subprocess.run([binary, "user", "add", "cura", "--role", "curator", "--data", data],
+                     input="curator-pass\n", capture_output=True, text=True, timeout=60)
+if add.returncode != 0:
+    sys.exit("meshflow user add failed: " + add.stderr)
 hub = subprocess.Popen([binary, "hub", "--port", "0", "--data", data],
                        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 failures = []
@@ -124,9 +129,88 @@ try:
     code, ctype, body = http("GET", "/ontology/wo")
     check(code == 200 and b"WorkflowExecutable" in body, "GET /ontology/wo")
     code, _, _ = http("DELETE", "/api/workflows/mesh-repairing")
-    check(code in (401, 403), f"anonymous delete refused (got {code})")
+    check(code == 401, f"anonymous delete refused (got {code})")
     code, _, _ = http("GET", "/api/workflows/mesh-repairing")
     check(code == 200, "the example is still there")
+
+    # Accounts: sign-up logs in; cookie writes need the CSRF header; tokens need none.
+    def account(name, password):
+        code, _, body = http("POST", "/api/users", json.dumps({"name": name, "password": password}).encode(),
+                             {"Content-Type": "application/json"})
+        return code, body
+    code, body = account("alice", "alice-pass")
+    check(code == 201 and json.loads(body)["role"] == "user", f"sign-up (got {code})")
+    code, body = account("alice", "other-pass")
+    check(code == 400, f"a taken name is refused (got {code})")
+    code, body = account("bob", "short")
+    check(code == 400, f"a short password is refused (got {code})")
+    def login(name, password):
+        req = urllib.request.Request(url + "/api/session", method="POST",
+                                     data=json.dumps({"name": name, "password": password}).encode(),
+                                     headers={"Content-Type": "application/json"})
+        try:
+            with urllib.request.urlopen(req, timeout=30) as r:
+                cookie = r.headers["Set-Cookie"].split(";")[0]
+                return r.status, cookie, json.loads(r.read())["csrf"], r.headers["Set-Cookie"]
+        except urllib.error.HTTPError as e:
+            return e.code, None, None, None
+    code, _, _, _ = login("alice", "wrong-pass")
+    check(code == 401, f"wrong password -> 401 (got {code})")
+    code, cookie, csrf, setc = login("alice", "alice-pass")
+    check(code == 200 and "HttpOnly" in setc and "SameSite=Strict" in setc, f"log-in sets the cookie ({setc})")
+    wf = {"name": "Alice smooths", "description": "Two smoothing steps for scans",
+          "domains": ["Smoothing"],
+          "xml": "<workflow><body><atomic><name>LaplacianSmoothing</name></atomic></body></workflow>"}
+    jh = {"Content-Type": "application/json", "Cookie": cookie}
+    code, _, _ = http("POST", "/api/workflows", json.dumps(wf).encode(), jh)
+    check(code == 403, f"cookie POST without CSRF -> 403 (got {code})")
+    code, _, body = http("POST", "/api/workflows", json.dumps(wf).encode(), dict(jh, **{"X-CSRF-Token": csrf}))
+    check(code == 201, f"create with CSRF -> 201 (got {code}) {body[:150]}")
+    alice_id = json.loads(body)["id"] if code == 201 else "none"
+    code, _, body = http("GET", "/api/workflows?creator=alice")
+    check([w["id"] for w in json.loads(body)["workflows"]] == [alice_id], "search by creator")
+    bad = dict(wf, xml="<workflow><body>\n<atomic><name>Frobnicate</name></atomic></body></workflow>")
+    code, _, body = http("POST", "/api/workflows", json.dumps(bad).encode(), dict(jh, **{"X-CSRF-Token": csrf}))
+    where = json.loads(body).get("where", {})
+    check(code == 400 and where.get("line") == 2, f"unknown operation -> 400 with line ({code} {body[:160]})")
+    bad = dict(wf, xml="<workflow><body>")
+    code, _, body = http("POST", "/api/workflows", json.dumps(bad).encode(), dict(jh, **{"X-CSRF-Token": csrf}))
+    check(code == 400 and "line" in json.loads(body).get("where", {}), f"malformed XML -> 400 with line ({code})")
+    code, _, body = http("POST", "/api/workflows", b"{" + b" " * (2 << 20) + b"}", dict(jh, **{"X-CSRF-Token": csrf}))
+    check(code == 413, f"oversized workflow body -> 413 (got {code})")
+    static = {"name": "Print prep", "description": "docs", "domains": ["Printing3D"], "type": "static",
+              "operations": ["FillHoles"]}
+    code, _, _ = http("POST", "/api/workflows", json.dumps(static).encode(), dict(jh, **{"X-CSRF-Token": csrf}))
+    check(code == 403, f"a user cannot file a static workflow (got {code})")
+    code, _, body = http("POST", "/api/tokens", b"", {"Cookie": cookie, "X-CSRF-Token": csrf})
+    check(code == 201, f"API token (got {code})")
+    token = json.loads(body)["token"]
+    code, _, body = http("POST", "/api/workflows", json.dumps(dict(wf, name="By token")).encode(),
+                         {"Content-Type": "application/json", "Authorization": "Bearer " + token})
+    check(code == 201, f"create with a bearer token, no CSRF (got {code})")
+    code, _, _ = http("DELETE", "/api/workflows/mesh-repairing", headers={"Authorization": "Bearer " + token})
+    check(code == 403, f"a user cannot delete another's workflow (got {code})")
+    code, _, _ = http("DELETE", "/api/workflows/" + alice_id, headers={"Authorization": "Bearer nope"})
+    check(code == 401, f"unknown token -> 401 (got {code})")
+    code, _, _ = http("DELETE", "/api/workflows/" + alice_id, headers={"Cookie": cookie, "X-CSRF-Token": csrf})
+    check(code == 204, f"the creator deletes (got {code})")
+    code, _, _ = http("GET", "/api/workflows/" + alice_id)
+    check(code == 404, f"deleted workflow is gone (got {code})")
+    code, ccur, ccsrf, _ = login("cura", "curator-pass")
+    code, _, body = http("POST", "/api/workflows", json.dumps(static).encode(),
+                         {"Content-Type": "application/json", "Cookie": ccur, "X-CSRF-Token": ccsrf})
+    check(code == 201 and json.loads(body)["type"] == "static", f"curator files a static workflow ({code})")
+    code, _, body = http("GET", "/api/workflows?type=static")
+    check(json.loads(body)["total"] == 1, "type=static finds it")
+    code, _, _ = http("GET", "/api/session", headers={"Cookie": cookie})
+    check(code == 200, "GET /api/session")
+    code, _, _ = http("DELETE", "/api/session", headers={"Cookie": cookie, "X-CSRF-Token": csrf})
+    check(code == 204, f"log-out (got {code})")
+    code, _, _ = http("GET", "/api/session", headers={"Cookie": cookie})
+    check(code == 401, f"logged out -> 401 (got {code})")
+    code, _, body = http("GET", "/sparql?query=" + urllib.parse.quote(
+        "SELECT ?p ?o WHERE { <http://meshflow.org/user/alice> ?p ?o }"))
+    check(b"alice" in body and b"argon" not in body.lower(), "users are RDF, without secrets")
 finally:
     hub.send_signal(signal.SIGTERM)
     try:
