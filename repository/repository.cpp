@@ -328,7 +328,8 @@ SearchPage Repository::search(const SearchQuery& q) {
   else if (q.type == "executable") cls = "WorkflowExecutable";
   else if (!q.type.empty())
     throw InvalidInput("type must be static or executable, not \"" + q.type + "\"");
-  std::string where = "?w a wo:" + cls + " .\n";
+  // The most selective patterns first: rasqal joins in the order written.
+  std::string where;
   auto filter = [&](const std::string& value, const char* what, const std::string& pattern) {
     if (value.empty()) return;
     if (!is_identifier(value)) throw InvalidInput(std::string("bad ") + what + " \"" + value + "\"");
@@ -341,7 +342,7 @@ SearchPage Repository::search(const SearchQuery& q) {
   filter(q.output, "output", "?w wo:outputType wo:" + q.output);
   filter(q.operation, "operation", "?w wo:usesOperation wo:" + q.operation);
   filter(q.creator, "creator", "?w wo:creator <" + std::string(kUserBase) + q.creator + ">");
-  where += "?w wo:name ?n ; wo:description ?d ; wo:created ?c .\n";
+  where += "?w a wo:" + cls + " ; wo:name ?n ; wo:description ?d ; wo:created ?c .\n";
   auto terms = words(q.q);
   if (!terms.empty()) {
     where += "FILTER(";
