@@ -10,6 +10,7 @@
 #include "mesh/errors.h"
 #include "web/hub_server.h"
 #include "web/node_supervisor.h"
+#include "web/ui_routes.h"
 
 namespace meshflow::apps {
 namespace {
@@ -50,6 +51,7 @@ void announce(const web::HubServer& hub) {
 int run_hub(const HubArgs& args) {
   block_stop_signals();
   web::HubServer hub(hub_options(args));
+  web::add_ui_routes(hub.http(), web::default_ui_dir());
   hub.start();
   announce(hub);
   wait_for_stop_signal();
@@ -61,6 +63,7 @@ int run_up(const HubArgs& args) {
   if (args.nodes < 0) throw InvalidInput("--nodes must be >= 0");
   block_stop_signals();
   web::HubServer hub(hub_options(args));
+  web::add_ui_routes(hub.http(), web::default_ui_dir());
   hub.start();
   std::size_t expected = static_cast<std::size_t>(args.nodes);
   hub.set_ready_condition(
