@@ -239,8 +239,8 @@ test('a curator registers a node by URL and adds a static workflow', { timeout: 
   await page.context().close();
 });
 
-// node:test decides skips when the test is declared, before `before` runs: ask the build's hub
-// binary directly whether it has the repository (the `user` command arrives with it).
+// node:test decides skips when the test is declared, before `before` runs: ask the build's
+// binary whether it has the repository (its `user` command arrives with it).
 function hasRepositoryAtLoad() {
-  try { execFileSync(EXE, ['user', '--help'], { stdio: 'ignore' }); return true; } catch { return false; }
+  try { return /^\s+user\s/m.test(execFileSync(EXE, ['--help'], { encoding: 'utf8' })); } catch { return false; }
 }
