@@ -11,6 +11,7 @@
 #include "web/hub_server.h"
 #include "web/node_supervisor.h"
 #include "web/repository_routes.h"
+#include "web/ui_routes.h"
 
 namespace meshflow::apps {
 namespace {
@@ -48,15 +49,24 @@ void announce(const web::HubServer& hub) {
   std::cout << "meshflow: ready at " << hub.url() << std::endl;
 }
 
+// What the hub serves beside jobs: the repository (store, accounts) and the browser UI. The
+// store opens and the examples load before the server starts, so ready means loaded.
+struct HubRoutes {
+  repository::Repository repo;
+  repository::Accounts accounts;
+  web::Auth auth;
+  HubRoutes(web::HubServer& hub, const HubArgs& args)
+      : repo(args.data), accounts(args.data, repo), auth(accounts) {
+    web::add_account_routes(hub, auth);
+    web::add_repository_routes(hub, repo, auth);
+    web::add_ui_routes(hub.http(), web::default_ui_dir());
+  }
+};
+
 int run_hub(const HubArgs& args) {
   block_stop_signals();
   web::HubServer hub(hub_options(args));
-  // The store opens and the examples load before the server starts: ready means loaded.
-  repository::Repository repo(args.data);
-  repository::Accounts accounts(args.data, repo);
-  web::Auth auth(accounts);
-  web::add_account_routes(hub, auth);
-  web::add_repository_routes(hub, repo, auth);
+  HubRoutes routes(hub, args);
   hub.start();
   announce(hub);
   wait_for_stop_signal();
@@ -68,11 +78,7 @@ int run_up(const HubArgs& args) {
   if (args.nodes < 0) throw InvalidInput("--nodes must be >= 0");
   block_stop_signals();
   web::HubServer hub(hub_options(args));
-  repository::Repository repo(args.data);
-  repository::Accounts accounts(args.data, repo);
-  web::Auth auth(accounts);
-  web::add_account_routes(hub, auth);
-  web::add_repository_routes(hub, repo, auth);
+  HubRoutes routes(hub, args);
   hub.start();
   std::size_t expected = static_cast<std::size_t>(args.nodes);
   hub.set_ready_condition(

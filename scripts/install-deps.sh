@@ -9,7 +9,8 @@ build="cmake ninja-build g++ pkg-config ccache libcli11-dev nlohmann-json3-dev z
   libssl-dev libsqlite3-dev libcgal-dev libgmp-dev libmpfr-dev libeigen3-dev libopenmesh-dev
   libxerces-c-dev librdf0-dev librdf-storage-sqlite libcpp-httplib-dev libcurl4-gnutls-dev
   libsodium-dev libgtest-dev libgmock-dev"
-test="$build clang libclang-rt-14-dev zstd python3 curl raptor2-utils rasqal-utils python3-sparqlwrapper python3-rdflib"
+test="$build clang libclang-rt-14-dev zstd python3 curl raptor2-utils rasqal-utils python3-sparqlwrapper python3-rdflib
+  chromium nodejs"
 bench="$test iproute2 time meshlab xvfb xauth libopenmesh-apps libmeshoptimizer-dev libbenchmark-dev"
 
 case "$group" in
