@@ -1,0 +1,87 @@
+#include "parallel/distributed_simplify.h"
+
+#include <gtest/gtest.h>
+
+#include "mesh/errors.h"
+#include "mesh/generate.h"
+#include "mesh/measures.h"
+#include "mesh/mesh_io.h"
+#include "parallel/bsp_partition.h"
+#include "services/compare.h"
+#include "services/simplify.h"
+#include "tests/support/meshes.h"
+
+namespace meshflow::parallel {
+namespace {
+
+using mesh::Mesh;
+
+Mesh generated(mesh::Shape shape, std::uint64_t triangles) {
+  meshflow::testing::TempDir dir;
+  mesh::GenerateParams g;
+  g.shape = shape;
+  g.triangles = triangles;
+  mesh::generate_mesh(g, dir.file("m.ply"));
+  return mesh::read_mesh(dir.file("m.ply"));
+}
+
+TEST(BspPartition, CellsCoverEveryVertexAndStayNearTheLimit) {
+  Mesh m = generated(mesh::Shape::Terrain, 100000);
+  BspPartition p = bsp_partition(m, 5000);
+  EXPECT_GE(p.cells, m.positions.size() / 5000);
+  std::vector<std::size_t> count(p.cells, 0);
+  for (auto c : p.cell_of_vertex) {
+    ASSERT_LT(c, p.cells);
+    count[c]++;
+  }
+  for (std::size_t c = 0; c < p.cells; ++c) {
+    EXPECT_GT(count[c], 0u);
+    EXPECT_LE(count[c], 5000u * 3 / 2);  // estimated from a sample: allow 50 %
+  }
+  EXPECT_THROW(bsp_partition(m, 0), InvalidInput);
+}
+
+// The guarantees of issue 7 against a single-node simplification of the same input: same
+// components and boundary loops (no crack), manifold, watertight when the input is, error
+// within 5 %, vertex count within 10 %, and the same result whatever the number of workers.
+TEST(DistributedSimplify, MatchesSingleNodeWithoutCracks) {
+  for (mesh::Shape shape : {mesh::Shape::Terrain, mesh::Shape::Sphere}) {
+    SCOPED_TRACE(shape == mesh::Shape::Sphere ? "sphere" : "terrain");
+    Mesh input = generated(shape, 80000);
+    double max_error = 0.0005 * mesh::bounding_box(input).diagonal();
+    Mesh single = services::simplify(input, {.max_error = max_error}).output;
+    auto s = mesh::compute_measures(single);
+    double single_error = services::compare(input, single).mean_ab;
+    Mesh first;
+    for (unsigned workers : {1u, 3u}) {
+      DistributedReport report;
+      Mesh out = simplify_distributed(input, {.max_error = max_error, .vertices_per_part = 4000, .workers = workers}, report);
+      EXPECT_GE(report.parts, 8u);
+      EXPECT_GT(report.seam_vertices, 0u);
+      auto d = mesh::compute_measures(out);
+      EXPECT_EQ(d.components, s.components);
+      EXPECT_EQ(d.boundary_loops, s.boundary_loops);
+      EXPECT_TRUE(d.is_manifold);
+      EXPECT_EQ(d.is_watertight, s.is_watertight);
+      EXPECT_EQ(d.degenerate_triangles, 0u);
+      EXPECT_LE(services::compare(input, out).mean_ab, 1.05 * single_error);
+      EXPECT_NEAR(double(d.vertices) / double(s.vertices), 1.0, 0.1);
+      if (first.empty()) first = out;
+      else EXPECT_TRUE(out == first) << "the result depends on the number of workers";
+    }
+  }
+}
+
+TEST(DistributedSimplify, RefusesBadInput) {
+  Mesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  m.triangles = {{0, 1, 7}};
+  DistributedReport report;
+  EXPECT_THROW(simplify_distributed(m, {.max_error = 0.1}, report), InvalidInput);
+  m.triangles = {{0, 1, 2}};
+  EXPECT_THROW(simplify_distributed(m, {.max_error = 0}, report), InvalidInput);
+  EXPECT_THROW(simplify_distributed(m, {.max_error = 0.1, .workers = 0}, report), InvalidInput);
+}
+
+}  // namespace
+}  // namespace meshflow::parallel
