@@ -25,7 +25,7 @@ if [ -n "${BIG:-}" ]; then
   else runs+=("terrain:500000000"); fi
 fi
 
-printf "%-20s %7s %10s %8s %8s %8s %8s %8s %8s %9s %9s %8s\n" input workers parts partit. parts merge seams total wall peakMB cat_s cp_s
+printf "%-20s %7s %10s %8s %8s %8s %8s %8s %8s %9s %9s %8s\n" input workers nparts partit_s parts_s merge_s seams_s total_s wall_s peakMB cat_s cp_s
 for run in "${runs[@]}"; do
   kind=${run%%:*}; n=${run##*:}; in="$OUT/$kind$n.ply"
   [ -f "$in" ] || "$MF" generate "$kind" --triangles "$n" -o "$in" >/dev/null || { echo "generate $kind $n failed"; continue; }
