@@ -4,11 +4,14 @@
 #include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <limits>
 #include <mutex>
 #include <thread>
+#include <unordered_map>
 
 #include "mesh/errors.h"
+#include "mesh/part_files.h"
 #include "parallel/bsp_partition.h"
 #include "services/simplify.h"
 
@@ -22,11 +25,6 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-struct Part {
-  std::vector<Index> triangles;      // input triangle ids
-  std::vector<Index> global_ids;     // local vertex -> input vertex, ascending
-  services::SimplifyResult result;
-};
 
 }  // namespace
 
@@ -41,114 +39,150 @@ std::string DistributedReport::to_json() const {
   return buf;
 }
 
-mesh::Mesh simplify_distributed(const mesh::Mesh& input, const DistributedParams& params, DistributedReport& report) {
-  if (params.max_error <= 0) throw InvalidInput("--max-error must be > 0");
-  if (params.workers == 0) throw InvalidInput("--workers must be at least 1");
+namespace {
+
+std::string part_path(const std::string& dir, std::size_t p, bool simplified) {
+  return dir + "/part-" + std::to_string(p) + (simplified ? ".simplified.mfp" : ".mfp");
+}
+
+}  // namespace
+
+std::size_t partition_to_files(const mesh::Mesh& input, std::size_t vertices_per_part, const std::string& dir,
+                               DistributedReport& report) {
   const std::size_t V = input.positions.size();
   for (const auto& tri : input.triangles)
     for (Index v : tri)
       if (v >= V) throw InvalidInput("triangle refers to vertex " + std::to_string(v) + " of " + std::to_string(V));
-
-  // Partition: vertices by BSP cell, a triangle to the lowest cell among its vertices (the
-  // vertices of other cells go with it as copies).
+  std::filesystem::create_directories(dir);
   auto start = std::chrono::steady_clock::now();
-  BspPartition bsp = bsp_partition(input, params.vertices_per_part);
-  std::vector<Part> parts(bsp.cells);
+  // Vertices by BSP cell, a triangle to the lowest cell among its vertices (the vertices of
+  // other cells go with it as copies).
+  BspPartition bsp = bsp_partition(input, vertices_per_part);
+  std::vector<std::vector<Index>> triangles_of(bsp.cells);
   for (std::size_t t = 0; t < input.triangles.size(); ++t) {
     const auto& tri = input.triangles[t];
     std::uint32_t cell = std::min({bsp.cell_of_vertex[tri[0]], bsp.cell_of_vertex[tri[1]], bsp.cell_of_vertex[tri[2]]});
-    parts[cell].triangles.push_back(static_cast<Index>(t));
+    triangles_of[cell].push_back(static_cast<Index>(t));
   }
-  // A vertex used by triangles of two or more parts is a seam vertex.
-  std::vector<std::uint32_t> first_part(V, std::numeric_limits<std::uint32_t>::max());
+  bsp.cell_of_vertex = {};
+  std::erase_if(triangles_of, [](const auto& ts) { return ts.empty(); });
+  // A vertex used by triangles of two or more parts is shared (a seam vertex).
+  constexpr std::uint32_t kNoPart = std::numeric_limits<std::uint32_t>::max();
+  std::vector<std::uint32_t> first_part(V, kNoPart);
   std::vector<bool> seam(V, false);
-  for (std::uint32_t p = 0; p < parts.size(); ++p)
-    for (Index t : parts[p].triangles)
+  for (std::uint32_t p = 0; p < triangles_of.size(); ++p)
+    for (Index t : triangles_of[p])
       for (Index v : input.triangles[t]) {
-        if (first_part[v] == std::numeric_limits<std::uint32_t>::max()) first_part[v] = p;
+        if (first_part[v] == kNoPart) first_part[v] = p;
         else if (first_part[v] != p) seam[v] = true;
       }
   first_part = {};
-  report.parts = std::count_if(parts.begin(), parts.end(), [](const Part& p) { return !p.triangles.empty(); });
+  std::vector<Index> local(V, kNone);
+  for (std::size_t p = 0; p < triangles_of.size(); ++p) {
+    mesh::PartFile part;
+    std::vector<Index> ids;
+    for (Index t : triangles_of[p])
+      for (Index v : input.triangles[t]) ids.push_back(v);
+    std::sort(ids.begin(), ids.end());
+    ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+    for (std::size_t i = 0; i < ids.size(); ++i) {
+      local[ids[i]] = static_cast<Index>(i);
+      part.global_ids.push_back(ids[i]);
+      part.positions.push_back(input.positions[ids[i]]);
+      part.shared.push_back(seam[ids[i]]);
+    }
+    for (Index t : triangles_of[p]) {
+      const auto& tri = input.triangles[t];
+      part.triangles.push_back({local[tri[0]], local[tri[1]], local[tri[2]]});
+    }
+    for (Index v : ids) local[v] = kNone;
+    mesh::write_part(part, part_path(dir, p, false));
+    triangles_of[p] = {};
+  }
+  report.parts = triangles_of.size();
   report.samples = bsp.samples;
   report.seam_vertices = std::count(seam.begin(), seam.end(), true);
   report.partition_seconds = seconds_since(start);
+  return report.parts;
+}
 
-  // Parts, simplified by the worker pool with their seam vertices fixed.
-  start = std::chrono::steady_clock::now();
+void simplify_part_files(const std::string& dir, std::size_t parts, const DistributedParams& params,
+                         DistributedReport& report) {
+  if (params.max_error <= 0) throw InvalidInput("--max-error must be > 0");
+  if (params.workers == 0) throw InvalidInput("--workers must be at least 1");
+  auto start = std::chrono::steady_clock::now();
   std::atomic<std::size_t> next{0}, finished{0};
   std::mutex error_mutex;
   std::string error;
   auto work = [&] {
-    std::vector<Index> local(V, kNone);
-    for (std::size_t p; (p = next++) < parts.size();) {
-      Part& part = parts[p];
-      if (part.triangles.empty()) continue;
+    for (std::size_t p; (p = next++) < parts;) {
       try {
-        for (Index t : part.triangles)
-          for (Index v : input.triangles[t]) part.global_ids.push_back(v);
-        std::sort(part.global_ids.begin(), part.global_ids.end());
-        part.global_ids.erase(std::unique(part.global_ids.begin(), part.global_ids.end()), part.global_ids.end());
-        mesh::Mesh m;
-        std::vector<bool> locked(part.global_ids.size());
-        for (std::size_t i = 0; i < part.global_ids.size(); ++i) {
-          Index g = part.global_ids[i];
-          local[g] = static_cast<Index>(i);
-          m.positions.push_back(input.positions[g]);
-          locked[i] = seam[g];
-        }
-        for (Index t : part.triangles) {
-          const auto& tri = input.triangles[t];
-          m.triangles.push_back({local[tri[0]], local[tri[1]], local[tri[2]]});
-        }
-        for (Index g : part.global_ids) local[g] = kNone;
+        mesh::PartFile part = mesh::read_part(part_path(dir, p, false));
+        mesh::Mesh m{std::move(part.positions), std::move(part.triangles)};
+        std::vector<bool> locked(part.shared.begin(), part.shared.end());
         services::SimplifyParams sp;
         sp.max_error = params.max_error;
         sp.locked = &locked;
         sp.export_quadrics = true;
-        part.result = services::simplify(m, sp);
-        part.triangles = {};
+        services::SimplifyResult r = services::simplify(m, sp);
+        mesh::PartFile out;
+        for (Index i : r.source_ids) {
+          out.global_ids.push_back(part.global_ids[i]);
+          out.shared.push_back(part.shared[i]);
+        }
+        out.positions = std::move(r.output.positions);
+        out.triangles = std::move(r.output.triangles);
+        out.quadrics = std::move(r.quadrics);
+        mesh::write_part(out, part_path(dir, p, true));
       } catch (const std::exception& e) {
         std::lock_guard lock(error_mutex);
         error = "part " + std::to_string(p) + ": " + e.what();
       }
       std::size_t n = ++finished;
-      if (params.progress) params.progress("parts", double(n) / double(parts.size()));
+      if (params.progress) params.progress("parts", double(n) / double(parts));
     }
   };
   std::vector<std::thread> pool;
-  for (unsigned w = 0; w < std::min<std::size_t>(params.workers, parts.size()); ++w) pool.emplace_back(work);
+  for (unsigned w = 0; w < std::min<std::size_t>(params.workers, parts); ++w) pool.emplace_back(work);
   for (auto& th : pool) th.join();
   if (!error.empty()) throw std::runtime_error(error);
   report.parts_seconds = seconds_since(start);
+}
 
-  // Merge by global id; a seam vertex's quadrics from every part add up.
-  start = std::chrono::steady_clock::now();
-  std::vector<Index> merged_id(V, kNone);
+mesh::Mesh merge_part_files(const std::string& dir, std::size_t parts, const DistributedParams& params,
+                            DistributedReport& report) {
+  if (params.max_error <= 0) throw InvalidInput("--max-error must be > 0");
+  // Merge by global id; only shared vertices need a lookup, their quadrics add up.
+  auto start = std::chrono::steady_clock::now();
+  std::unordered_map<std::uint64_t, Index> shared_id;
   mesh::Mesh merged;
   std::vector<std::array<double, 11>> quadrics;
   std::vector<bool> merged_seam;
-  for (Part& part : parts) {
-    const auto& r = part.result;
-    std::vector<Index> to_merged(r.output.positions.size());
-    for (std::size_t i = 0; i < r.output.positions.size(); ++i) {
-      Index g = part.global_ids[r.source_ids[i]];
-      if (merged_id[g] == kNone) {
-        merged_id[g] = static_cast<Index>(merged.positions.size());
-        merged.positions.push_back(r.output.positions[i]);
-        quadrics.push_back(r.quadrics[i]);
-        merged_seam.push_back(seam[g]);
-      } else {
-        auto& q = quadrics[merged_id[g]];
-        for (int k = 0; k < 11; ++k) q[k] += r.quadrics[i][k];
+  for (std::size_t p = 0; p < parts; ++p) {
+    mesh::PartFile part = mesh::read_part(part_path(dir, p, true));
+    if (part.quadrics.size() != part.positions.size())
+      throw InvalidInput(part_path(dir, p, true) + ": a simplified part must carry its quadrics");
+    std::vector<Index> to_merged(part.positions.size());
+    for (std::size_t i = 0; i < part.positions.size(); ++i) {
+      Index id = static_cast<Index>(merged.positions.size());
+      if (part.shared[i]) {
+        auto [it, added] = shared_id.try_emplace(part.global_ids[i], id);
+        if (!added) {
+          auto& q = quadrics[it->second];
+          for (int k = 0; k < 11; ++k) q[k] += part.quadrics[i][k];
+          to_merged[i] = it->second;
+          continue;
+        }
       }
-      to_merged[i] = merged_id[g];
+      merged.positions.push_back(part.positions[i]);
+      quadrics.push_back(part.quadrics[i]);
+      merged_seam.push_back(part.shared[i]);
+      to_merged[i] = id;
     }
-    for (const auto& tri : r.output.triangles)
+    for (const auto& tri : part.triangles)
       merged.triangles.push_back({to_merged[tri[0]], to_merged[tri[1]], to_merged[tri[2]]});
-    part = Part{};
   }
-  merged_id = {};
+  shared_id = {};
   report.merged_vertices = merged.positions.size();
   report.merge_seconds = seconds_since(start);
 
@@ -163,6 +197,15 @@ mesh::Mesh simplify_distributed(const mesh::Mesh& input, const DistributedParams
   report.output_vertices = out.positions.size();
   report.seams_seconds = seconds_since(start);
   return out;
+}
+
+mesh::Mesh simplify_distributed(const mesh::Mesh& input, const DistributedParams& params, DistributedReport& report) {
+  if (params.max_error <= 0) throw InvalidInput("--max-error must be > 0");
+  if (params.workers == 0) throw InvalidInput("--workers must be at least 1");
+  if (params.parts_dir.empty()) throw InvalidInput("a parts directory is needed");
+  std::size_t parts = partition_to_files(input, params.vertices_per_part, params.parts_dir, report);
+  simplify_part_files(params.parts_dir, parts, params, report);
+  return merge_part_files(params.parts_dir, parts, params, report);
 }
 
 }  // namespace meshflow::parallel

@@ -6,8 +6,10 @@
 // seams with the accumulated quadrics. The seams match by construction: a shared vertex is
 // the same global vertex in every part.
 //
-// Not yet as the issue asks: the input is held in memory, the workers are threads of this
-// process (no part files, no nodes), and the seam pass runs on the whole merged mesh.
+// The steps talk through part files (mesh/part_files.h) in a parts directory: part-<i>.mfp
+// from the partition, part-<i>.simplified.mfp (with quadrics) from the workers.
+// Not yet as the issue asks: the partition holds the input in memory, the workers are threads
+// of this process (no nodes), and the seam pass runs on the whole merged mesh in memory.
 
 #include <cstddef>
 #include <functional>
@@ -21,6 +23,7 @@ struct DistributedParams {
   double max_error = 0;               // absolute distance
   std::size_t vertices_per_part = 1000000;
   unsigned workers = 2;
+  std::string parts_dir;
   std::function<void(const std::string& step, double fraction)> progress;
 };
 
@@ -31,6 +34,16 @@ struct DistributedReport {
   std::string to_json() const;
 };
 
+// Writes part-<i>.mfp into `dir`; returns the number of parts.
+std::size_t partition_to_files(const mesh::Mesh& input, std::size_t vertices_per_part, const std::string& dir,
+                               DistributedReport& report);
+// part-<i>.mfp -> part-<i>.simplified.mfp, `params.workers` at a time, shared vertices fixed.
+void simplify_part_files(const std::string& dir, std::size_t parts, const DistributedParams& params,
+                         DistributedReport& report);
+// The simplified parts merged by global id, then the seams simplified.
+mesh::Mesh merge_part_files(const std::string& dir, std::size_t parts, const DistributedParams& params,
+                            DistributedReport& report);
+// The three steps in a row, through params.parts_dir.
 mesh::Mesh simplify_distributed(const mesh::Mesh& input, const DistributedParams& params, DistributedReport& report);
 
 }  // namespace meshflow::parallel

@@ -2,10 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
 #include "mesh/errors.h"
 #include "mesh/generate.h"
 #include "mesh/measures.h"
 #include "mesh/mesh_io.h"
+#include "mesh/part_files.h"
 #include "parallel/bsp_partition.h"
 #include "services/compare.h"
 #include "services/simplify.h"
@@ -54,8 +57,11 @@ TEST(DistributedSimplify, MatchesSingleNodeWithoutCracks) {
     double single_error = services::compare(input, single).mean_ab;
     Mesh first;
     for (unsigned workers : {1u, 3u}) {
+      meshflow::testing::TempDir dir;
       DistributedReport report;
-      Mesh out = simplify_distributed(input, {.max_error = max_error, .vertices_per_part = 4000, .workers = workers}, report);
+      DistributedParams params;
+      params.max_error = max_error, params.vertices_per_part = 4000, params.workers = workers, params.parts_dir = dir.file("parts");
+      Mesh out = simplify_distributed(input, params, report);
       EXPECT_GE(report.parts, 8u);
       EXPECT_GT(report.seam_vertices, 0u);
       auto d = mesh::compute_measures(out);
@@ -76,11 +82,47 @@ TEST(DistributedSimplify, RefusesBadInput) {
   Mesh m;
   m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
   m.triangles = {{0, 1, 7}};
+  meshflow::testing::TempDir dir;
   DistributedReport report;
-  EXPECT_THROW(simplify_distributed(m, {.max_error = 0.1}, report), InvalidInput);
+  DistributedParams params;
+  params.max_error = 0.1, params.parts_dir = dir.file("parts");
+  EXPECT_THROW(simplify_distributed(m, params, report), InvalidInput);  // vertex 7 of 3
   m.triangles = {{0, 1, 2}};
-  EXPECT_THROW(simplify_distributed(m, {.max_error = 0}, report), InvalidInput);
-  EXPECT_THROW(simplify_distributed(m, {.max_error = 0.1, .workers = 0}, report), InvalidInput);
+  params.max_error = 0;
+  EXPECT_THROW(simplify_distributed(m, params, report), InvalidInput);
+  params.max_error = 0.1, params.workers = 0;
+  EXPECT_THROW(simplify_distributed(m, params, report), InvalidInput);
+  // A damaged part file is refused with its name and byte offset.
+  params.workers = 1;
+  ASSERT_EQ(partition_to_files(m, 10, params.parts_dir, report), 1u);
+  std::filesystem::resize_file(params.parts_dir + "/part-0.mfp", 30);
+  try {
+    simplify_part_files(params.parts_dir, 1, params, report);
+    FAIL() << "a truncated part file was accepted";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("part-0.mfp: byte"), std::string::npos) << e.what();
+  }
+}
+
+TEST(PartFiles, RoundTripAndRefuseDamage) {
+  mesh::PartFile part;
+  part.global_ids = {3, 9, 12};
+  part.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  part.shared = {1, 0, 1};
+  part.triangles = {{0, 1, 2}};
+  auto bytes = mesh::encode_part(part);
+  mesh::PartFile back = mesh::decode_part(bytes, "p.mfp");
+  EXPECT_EQ(back.global_ids, part.global_ids);
+  EXPECT_EQ(back.positions, part.positions);
+  EXPECT_EQ(back.triangles, part.triangles);
+  part.quadrics.assign(3, {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11});
+  EXPECT_EQ(mesh::decode_part(mesh::encode_part(part), "p.mfp").quadrics, part.quadrics);
+  bytes.back() = 7;  // a corner past the three vertices
+  EXPECT_THROW(mesh::decode_part(bytes, "p.mfp"), ParseError);
+  bytes.resize(bytes.size() - 1);
+  EXPECT_THROW(mesh::decode_part(bytes, "p.mfp"), ParseError);
+  bytes[0] = 'X';
+  EXPECT_THROW(mesh::decode_part(bytes, "p.mfp"), ParseError);
 }
 
 }  // namespace
