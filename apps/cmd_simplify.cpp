@@ -81,6 +81,7 @@ void add_simplify_command(CLI::App& app, int& exit_status) {
     std::size_t parts = parallel::partition_to_files(input, params.vertices_per_part, params.parts_dir, report);
     write_partition_info(params.parts_dir, parts, mesh::bounding_box(input).diagonal());
     input = {};
+    report.independent_sets = parallel::independent_sets(report.adjacency, params.workers);
     parallel::simplify_part_files(params.parts_dir, parts, params, report);
     mesh::Mesh output = parallel::merge_part_files(params.parts_dir, parts, params, report);
     if (params.progress) std::fprintf(stderr, "\n");

@@ -29,14 +29,23 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 }  // namespace
 
 std::string DistributedReport::to_json() const {
+  std::string sets = "[";
+  for (const auto& set : independent_sets) {
+    sets += sets.size() > 1 ? ", [" : "[";
+    for (std::size_t i = 0; i < set.size(); ++i) sets += (i ? ", " : "") + std::to_string(set[i]);
+    sets += "]";
+  }
+  sets += "]";
+  std::size_t pairs = 0;
+  for (const auto& n : adjacency) pairs += n.size();
   char buf[512];
   std::snprintf(buf, sizeof buf,
                 "{\"parts\": %zu, \"samples\": %zu, \"seam_vertices\": %zu, \"merged_vertices\": %zu, "
-                "\"output_vertices\": %zu, \"seconds\": {\"partition\": %.3f, \"parts\": %.3f, \"merge\": %.3f, "
-                "\"seams\": %.3f, \"total\": %.3f}}\n",
-                parts, samples, seam_vertices, merged_vertices, output_vertices, partition_seconds, parts_seconds,
+                "\"output_vertices\": %zu, \"adjacent_pairs\": %zu, \"seconds\": {\"partition\": %.3f, \"parts\": %.3f, \"merge\": %.3f, "
+                "\"seams\": %.3f, \"total\": %.3f}, \"independent_sets\": ",
+                parts, samples, seam_vertices, merged_vertices, output_vertices, pairs / 2, partition_seconds, parts_seconds,
                 merge_seconds, seams_seconds, partition_seconds + parts_seconds + merge_seconds + seams_seconds);
-  return buf;
+  return buf + sets + "}\n";
 }
 
 namespace {
@@ -78,6 +87,7 @@ std::size_t partition_to_files(const mesh::Mesh& input, std::size_t vertices_per
       }
   first_part = {};
   std::vector<Index> local(V, kNone);
+  std::vector<std::pair<Index, std::uint32_t>> shared_uses;  // (seam vertex, part)
   for (std::size_t p = 0; p < triangles_of.size(); ++p) {
     mesh::PartFile part;
     std::vector<Index> ids;
@@ -90,6 +100,7 @@ std::size_t partition_to_files(const mesh::Mesh& input, std::size_t vertices_per
       part.global_ids.push_back(ids[i]);
       part.positions.push_back(input.positions[ids[i]]);
       part.shared.push_back(seam[ids[i]]);
+      if (seam[ids[i]]) shared_uses.emplace_back(ids[i], static_cast<std::uint32_t>(p));
     }
     for (Index t : triangles_of[p]) {
       const auto& tri = input.triangles[t];
@@ -98,6 +109,21 @@ std::size_t partition_to_files(const mesh::Mesh& input, std::size_t vertices_per
     for (Index v : ids) local[v] = kNone;
     mesh::write_part(part, part_path(dir, p, false));
     triangles_of[p] = {};
+  }
+  // Parts sharing a vertex are adjacent.
+  std::sort(shared_uses.begin(), shared_uses.end());
+  report.adjacency.assign(triangles_of.size(), {});
+  for (std::size_t i = 0; i < shared_uses.size();) {
+    std::size_t j = i;
+    while (j < shared_uses.size() && shared_uses[j].first == shared_uses[i].first) ++j;
+    for (std::size_t a = i; a < j; ++a)
+      for (std::size_t b = i; b < j; ++b)
+        if (a != b) report.adjacency[shared_uses[a].second].push_back(shared_uses[b].second);
+    i = j;
+  }
+  for (auto& neighbours : report.adjacency) {
+    std::sort(neighbours.begin(), neighbours.end());
+    neighbours.erase(std::unique(neighbours.begin(), neighbours.end()), neighbours.end());
   }
   report.parts = triangles_of.size();
   report.samples = bsp.samples;

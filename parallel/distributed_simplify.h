@@ -16,6 +16,7 @@
 #include <string>
 
 #include "mesh/mesh.h"
+#include "parallel/independent_sets.h"
 
 namespace meshflow::parallel {
 
@@ -31,6 +32,9 @@ struct DistributedReport {
   std::size_t parts = 0, samples = 0, seam_vertices = 0;
   std::size_t merged_vertices = 0, output_vertices = 0;
   double partition_seconds = 0, parts_seconds = 0, merge_seconds = 0, seams_seconds = 0;
+  PartGraph adjacency;                                      // from the partition
+  std::vector<std::vector<std::uint32_t>> independent_sets;  // of at most `workers` parts: recorded for the
+                                                            // node dispatch; fixed seams make every part independent
   std::string to_json() const;
 };
 

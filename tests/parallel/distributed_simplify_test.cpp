@@ -104,6 +104,28 @@ TEST(DistributedSimplify, RefusesBadInput) {
   }
 }
 
+TEST(IndependentSets, NoTwoAdjacentPartsTogetherAndEveryPartOnce) {
+  Mesh m = generated(mesh::Shape::Sphere, 40000);
+  meshflow::testing::TempDir dir;
+  DistributedReport report;
+  std::size_t parts = partition_to_files(m, 1500, dir.file("parts"), report);
+  ASSERT_GE(parts, 8u);
+  for (std::size_t max_set : {1u, 2u, 4u}) {
+    auto sets = independent_sets(report.adjacency, max_set);
+    std::vector<int> seen(parts, 0);
+    for (const auto& set : sets) {
+      EXPECT_LE(set.size(), max_set);
+      for (auto a : set) {
+        seen[a]++;
+        for (auto b : set)
+          EXPECT_FALSE(std::binary_search(report.adjacency[a].begin(), report.adjacency[a].end(), b));
+      }
+    }
+    EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), static_cast<long>(parts));
+  }
+  EXPECT_THROW(independent_sets(report.adjacency, 0), InvalidInput);
+}
+
 TEST(PartFiles, RoundTripAndRefuseDamage) {
   mesh::PartFile part;
   part.global_ids = {3, 9, 12};
