@@ -68,6 +68,7 @@ void add_simplify_command(CLI::App& app, int& exit_status) {
     params.vertices_per_part = args->vertices_per_part;
     params.workers = args->workers ? args->workers : std::max(1u, std::thread::hardware_concurrency());
     params.progress = terminal_progress();
+    params.worker_executable = std::filesystem::read_symlink("/proc/self/exe").string();
     bool temporary = args->parts_dir.empty();
     params.parts_dir = temporary ? args->out + ".parts-" + std::to_string(getpid()) : args->parts_dir;
     struct RemoveOnExit {
@@ -136,8 +137,25 @@ void add_merge_command(CLI::App& app, int& exit_status) {
   });
 }
 
+// The worker process of `simplify`: one part file in, its simplified part file out.
+void add_part_simplify_command(CLI::App& app, int& exit_status) {
+  auto dir = std::make_shared<std::string>();
+  auto part = std::make_shared<std::size_t>(0);
+  auto max_error = std::make_shared<double>(0);
+  CLI::App* cmd = app.add_subcommand("part-simplify", "Worker of simplify: DIR/part-P.mfp -> DIR/part-P.simplified.mfp");
+  cmd->add_option("DIR", *dir, "Parts directory")->required();
+  cmd->add_option("P", *part, "Part number")->required();
+  cmd->add_option("--max-error-abs", *max_error, "Maximum RMS error, absolute")->required();
+  cmd->callback([dir, part, max_error, &exit_status] {
+    if (*max_error <= 0) throw InvalidInput("--max-error-abs must be > 0");
+    parallel::simplify_one_part(*dir, *part, *max_error);
+    exit_status = 0;
+  });
+}
+
 }  // namespace
 
+MESHFLOW_COMMAND(part_simplify, add_part_simplify_command);
 MESHFLOW_COMMAND(simplify, add_simplify_command);
 MESHFLOW_COMMAND(partition, add_partition_command);
 MESHFLOW_COMMAND(merge, add_merge_command);

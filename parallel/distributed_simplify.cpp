@@ -4,6 +4,12 @@
 #include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
 #include <filesystem>
 #include <limits>
 #include <mutex>
@@ -132,6 +138,58 @@ std::size_t partition_to_files(const mesh::Mesh& input, std::size_t vertices_per
   return report.parts;
 }
 
+void simplify_one_part(const std::string& dir, std::size_t p, double max_error) {
+  mesh::PartFile part = mesh::read_part(part_path(dir, p, false));
+  mesh::Mesh m{std::move(part.positions), std::move(part.triangles)};
+  std::vector<bool> locked(part.shared.begin(), part.shared.end());
+  services::SimplifyParams sp;
+  sp.max_error = max_error;
+  sp.locked = &locked;
+  sp.export_quadrics = true;
+  services::SimplifyResult r = services::simplify(m, sp);
+  mesh::PartFile out;
+  for (Index i : r.source_ids) {
+    out.global_ids.push_back(part.global_ids[i]);
+    out.shared.push_back(part.shared[i]);
+  }
+  out.positions = std::move(r.output.positions);
+  out.triangles = std::move(r.output.triangles);
+  out.quadrics = std::move(r.quadrics);
+  mesh::write_part(out, part_path(dir, p, true));
+}
+
+namespace {
+
+// `exe part-simplify DIR P --max-error-abs X`, its output in DIR/part-P.log.
+void run_worker_process(const std::string& exe, const std::string& dir, std::size_t p, double max_error) {
+  char error_text[64];
+  std::snprintf(error_text, sizeof error_text, "%.17g", max_error);
+  std::vector<std::string> args{exe, "part-simplify", dir, std::to_string(p), "--max-error-abs", error_text};
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  std::string log = dir + "/part-" + std::to_string(p) + ".log";
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
+  pid_t pid;
+  int rc = posix_spawn(&pid, exe.c_str(), &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (rc != 0) throw IoError("cannot start the worker " + exe + ": " + std::strerror(rc));
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    std::ifstream in(log);
+    std::string last, line;
+    while (std::getline(in, line)) last = line;
+    throw std::runtime_error("worker process failed (" + log + "): " + last);
+  }
+}
+
+}  // namespace
+
 void simplify_part_files(const std::string& dir, std::size_t parts, const DistributedParams& params,
                          DistributedReport& report) {
   if (params.max_error <= 0) throw InvalidInput("--max-error must be > 0");
@@ -143,23 +201,8 @@ void simplify_part_files(const std::string& dir, std::size_t parts, const Distri
   auto work = [&] {
     for (std::size_t p; (p = next++) < parts;) {
       try {
-        mesh::PartFile part = mesh::read_part(part_path(dir, p, false));
-        mesh::Mesh m{std::move(part.positions), std::move(part.triangles)};
-        std::vector<bool> locked(part.shared.begin(), part.shared.end());
-        services::SimplifyParams sp;
-        sp.max_error = params.max_error;
-        sp.locked = &locked;
-        sp.export_quadrics = true;
-        services::SimplifyResult r = services::simplify(m, sp);
-        mesh::PartFile out;
-        for (Index i : r.source_ids) {
-          out.global_ids.push_back(part.global_ids[i]);
-          out.shared.push_back(part.shared[i]);
-        }
-        out.positions = std::move(r.output.positions);
-        out.triangles = std::move(r.output.triangles);
-        out.quadrics = std::move(r.quadrics);
-        mesh::write_part(out, part_path(dir, p, true));
+        if (params.worker_executable.empty()) simplify_one_part(dir, p, params.max_error);
+        else run_worker_process(params.worker_executable, dir, p, params.max_error);
       } catch (const std::exception& e) {
         std::lock_guard lock(error_mutex);
         error = "part " + std::to_string(p) + ": " + e.what();

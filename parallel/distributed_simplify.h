@@ -25,6 +25,9 @@ struct DistributedParams {
   std::size_t vertices_per_part = 1000000;
   unsigned workers = 2;
   std::string parts_dir;
+  // When set, each part is simplified by a process `worker_executable part-simplify DIR P
+  // --max-error-abs X` (meshflow itself); otherwise by a thread of this process.
+  std::string worker_executable;
   std::function<void(const std::string& step, double fraction)> progress;
 };
 
@@ -41,6 +44,8 @@ struct DistributedReport {
 // Writes part-<i>.mfp into `dir`; returns the number of parts.
 std::size_t partition_to_files(const mesh::Mesh& input, std::size_t vertices_per_part, const std::string& dir,
                                DistributedReport& report);
+// One part: part-<p>.mfp -> part-<p>.simplified.mfp, its shared vertices fixed.
+void simplify_one_part(const std::string& dir, std::size_t p, double max_error);
 // part-<i>.mfp -> part-<i>.simplified.mfp, `params.workers` at a time, shared vertices fixed.
 void simplify_part_files(const std::string& dir, std::size_t parts, const DistributedParams& params,
                          DistributedReport& report);
