@@ -76,10 +76,15 @@ class Simplifier {
     std::vector<bool> lock(V, false);
     for (Index v : locked_) lock[v] = true;
     lock_ = std::move(lock);
+    if (params_.locked)
+      for (std::size_t v = 0; v < V && v < params_.locked->size(); ++v)
+        if ((*params_.locked)[v]) lock_[v] = true;
     stamp_.assign(V, 0);
     alive_.assign(V, false);
     for (std::size_t v = 0; v < V; ++v) alive_[v] = !vt_[v].empty();
-    for (std::size_t t = 0; t < tris_.size(); ++t) {
+    if (params_.quadrics) {
+      for (std::size_t v = 0; v < V && v < params_.quadrics->size(); ++v) quadric_[v] = from_array((*params_.quadrics)[v]);
+    } else for (std::size_t t = 0; t < tris_.size(); ++t) {
       const auto& tri = tris_[t];
       if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) continue;
       Vec n = cross(sub(pos_[tri[1]], pos_[tri[0]]), sub(pos_[tri[2]], pos_[tri[0]]));
@@ -117,7 +122,7 @@ class Simplifier {
           params_.progress(double(start_vertices - live_vertices_) / double(start_vertices));
       }
     }
-    result.output = output();
+    result.output = output(result);
     return result;
   }
 
@@ -147,7 +152,7 @@ class Simplifier {
       Index a = static_cast<Index>(keys[i] >> 32), b = static_cast<Index>(keys[i] & 0xffffffff);
       if (j - i == 1) {
         boundary_[a] = boundary_[b] = true;
-        add_boundary_plane(a, b);
+        if (wants_boundary_plane(a, b)) add_boundary_plane(a, b);
       } else if (j - i > 2) {
         lock_[a] = lock_[b] = true;  // non-manifold edge
       }
@@ -156,6 +161,23 @@ class Simplifier {
     // Non-manifold vertices (fans that are not one disk) are locked too.
     for (std::size_t v = 0; v < pos_.size(); ++v)
       if (alive_[v] && !lock_[v] && !is_disk(static_cast<Index>(v))) lock_[v] = true;
+  }
+
+  bool wants_boundary_plane(Index a, Index b) const {
+    if (params_.locked && a < params_.locked->size() && b < params_.locked->size() && (*params_.locked)[a] &&
+        (*params_.locked)[b])
+      return false;
+    if (params_.quadrics)
+      return params_.seam && a < params_.seam->size() && b < params_.seam->size() && (*params_.seam)[a] &&
+             (*params_.seam)[b];
+    return true;
+  }
+
+  static Quadric from_array(const std::array<double, 11>& q) {
+    return {q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], q[8], q[9], q[10]};
+  }
+  static std::array<double, 11> to_array(const Quadric& q) {
+    return {q.a2, q.ab, q.ac, q.ad, q.b2, q.bc, q.bd, q.c2, q.cd, q.d2, q.weight};
   }
 
   // A plane through the boundary edge, perpendicular to its triangle, heavily weighted.
@@ -321,7 +343,7 @@ class Simplifier {
     return true;
   }
 
-  mesh::Mesh output() const {
+  mesh::Mesh output(SimplifyResult& result) const {
     mesh::Mesh out;
     std::vector<Index> renumber(pos_.size(), 0);
     std::vector<bool> used(pos_.size(), false);
@@ -331,6 +353,8 @@ class Simplifier {
     for (std::size_t v = 0; v < pos_.size(); ++v) {
       if (!used[v]) continue;
       renumber[v] = static_cast<Index>(out.positions.size());
+      result.source_ids.push_back(static_cast<Index>(v));
+      if (params_.export_quadrics) result.quadrics.push_back(to_array(quadric_[v]));
       out.positions.push_back({static_cast<float>(pos_[v][0]), static_cast<float>(pos_[v][1]), static_cast<float>(pos_[v][2])});
     }
     for (std::size_t t = 0; t < tris_.size(); ++t)

@@ -9,9 +9,11 @@
 // keeps a manifold neighbourhood manifold (link condition) and flips no triangle. Non-manifold
 // edges and vertices are left alone.
 
+#include <array>
 #include <atomic>
 #include <cstddef>
 #include <functional>
+#include <vector>
 
 #include "mesh/mesh.h"
 
@@ -22,12 +24,22 @@ struct SimplifyParams {
   std::size_t target_vertices = 0;  // 0: no vertex target
   std::function<void(double)> progress;
   const std::atomic<bool>* cancel = nullptr;
+  // For simplification in pieces (parallel/). `locked` vertices are never moved nor removed,
+  // and a border edge between two locked vertices is a seam: it gets no constraint plane.
+  const std::vector<bool>* locked = nullptr;
+  // Start from these per-vertex quadrics instead of the triangles' planes; border planes are
+  // then added only on border edges whose two ends are flagged in `seam` (edges that had none).
+  const std::vector<std::array<double, 11>>* quadrics = nullptr;
+  const std::vector<bool>* seam = nullptr;
+  bool export_quadrics = false;
 };
 
 struct SimplifyResult {
   mesh::Mesh output;        // surviving referenced vertices in ascending input id order
   std::size_t collapses = 0;
   double max_rms_error = 0;  // the largest rms of a collapse made
+  std::vector<mesh::Index> source_ids;            // input id of each output vertex
+  std::vector<std::array<double, 11>> quadrics;   // of each output vertex, when exported
 };
 
 // \throws InvalidInput when neither a max_error nor a target is given.

@@ -1,0 +1,118 @@
+#include "mesh/part_files.h"
+
+#include <cstring>
+#include <fstream>
+#include <iterator>
+
+#include "mesh/errors.h"
+
+namespace meshflow::mesh {
+namespace {
+
+constexpr char kMagic[8] = {'M', 'F', 'P', 'A', 'R', 'T', '1', '\n'};
+
+template <typename T>
+void put(std::vector<std::uint8_t>& out, const T& value) {
+  const auto* p = reinterpret_cast<const std::uint8_t*>(&value);
+  out.insert(out.end(), p, p + sizeof(T));
+}
+
+class Cursor {
+ public:
+  Cursor(std::span<const std::uint8_t> bytes, const std::string& name) : bytes_(bytes), name_(name) {}
+  template <typename T>
+  T get(const char* what) {
+    need(sizeof(T), what);
+    T value;
+    std::memcpy(&value, bytes_.data() + at_, sizeof(T));
+    at_ += sizeof(T);
+    return value;
+  }
+  void need(std::uint64_t n, const char* what) const {
+    if (n > bytes_.size() - at_) fail(std::string("unexpected end of file: expected ") + what);
+  }
+  [[noreturn]] void fail(const std::string& reason) const {
+    throw ParseError({.file = name_, .line = {}, .column = {}, .byte_offset = at_}, reason);
+  }
+  std::size_t remaining() const { return bytes_.size() - at_; }
+
+ private:
+  std::span<const std::uint8_t> bytes_;
+  std::string name_;
+  std::size_t at_ = 0;
+};
+
+}  // namespace
+
+std::vector<std::uint8_t> encode_part(const PartFile& part) {
+  const bool quadrics = !part.quadrics.empty();
+  std::vector<std::uint8_t> out(kMagic, kMagic + 8);
+  put<std::uint64_t>(out, part.positions.size());
+  put<std::uint64_t>(out, part.triangles.size());
+  put<std::uint8_t>(out, quadrics);
+  for (std::size_t v = 0; v < part.positions.size(); ++v) {
+    put(out, part.global_ids[v]);
+    for (float c : part.positions[v]) put(out, c);
+    put<std::uint8_t>(out, part.shared[v]);
+    if (quadrics)
+      for (double q : part.quadrics[v]) put(out, q);
+  }
+  for (const Triangle& t : part.triangles)
+    for (Index v : t) put(out, v);
+  return out;
+}
+
+PartFile decode_part(std::span<const std::uint8_t> bytes, const std::string& name) {
+  Cursor in(bytes, name);
+  char magic[8];
+  for (char& c : magic) c = static_cast<char>(in.get<std::uint8_t>("the part header"));
+  if (std::memcmp(magic, kMagic, 8) != 0) in.fail("not a meshflow part file (expected \"MFPART1\")");
+  auto vertices = in.get<std::uint64_t>("the vertex count");
+  auto triangles = in.get<std::uint64_t>("the triangle count");
+  auto has_quadrics = in.get<std::uint8_t>("the quadric flag");
+  if (has_quadrics > 1) in.fail("quadric flag must be 0 or 1");
+  const std::uint64_t vertex_bytes = 8 + 12 + 1 + (has_quadrics ? 88 : 0);
+  // Both counts must fit the bytes left before anything is allocated.
+  if (vertices > in.remaining() / vertex_bytes || triangles > in.remaining() / 12 ||
+      vertices * vertex_bytes + triangles * 12 != in.remaining())
+    in.fail("counts (" + std::to_string(vertices) + " vertices, " + std::to_string(triangles) +
+            " triangles) do not match the " + std::to_string(in.remaining()) + " bytes that follow");
+  if (vertices > 0xffffffffu) in.fail("more than 2^32 vertices in one part");
+  PartFile part;
+  part.global_ids.resize(vertices);
+  part.positions.resize(vertices);
+  part.shared.resize(vertices);
+  if (has_quadrics) part.quadrics.resize(vertices);
+  for (std::uint64_t v = 0; v < vertices; ++v) {
+    part.global_ids[v] = in.get<std::uint64_t>("a global vertex id");
+    if (v > 0 && part.global_ids[v] <= part.global_ids[v - 1]) in.fail("global vertex ids must ascend");
+    for (float& c : part.positions[v]) c = in.get<float>("a coordinate");
+    part.shared[v] = in.get<std::uint8_t>("a shared flag");
+    if (part.shared[v] > 1) in.fail("shared flag must be 0 or 1");
+    if (has_quadrics)
+      for (double& q : part.quadrics[v]) q = in.get<double>("a quadric");
+  }
+  part.triangles.resize(triangles);
+  for (Triangle& t : part.triangles)
+    for (Index& v : t) {
+      v = in.get<Index>("a triangle corner");
+      if (v >= vertices) in.fail("triangle corner " + std::to_string(v) + " >= " + std::to_string(vertices) + " vertices");
+    }
+  return part;
+}
+
+void write_part(const PartFile& part, const std::string& path) {
+  std::vector<std::uint8_t> bytes = encode_part(part);
+  std::ofstream out(path, std::ios::binary);
+  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  if (!out) throw IoError(path + ": cannot write the part file");
+}
+
+PartFile read_part(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError(path + ": cannot open the part file");
+  std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return decode_part(bytes, path);
+}
+
+}  // namespace meshflow::mesh
