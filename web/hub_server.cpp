@@ -70,6 +70,7 @@ struct HubServer::Impl {
   std::function<std::optional<std::string>(const std::string&)> workflow_resolver;
   std::atomic<std::uint64_t> requests{0};
   std::atomic<std::size_t> registrations{0};  // since this start
+  std::function<void(const httplib::Request&)> service_curator_check;
 
   std::string url() const {
     return options.public_url.empty() ? "http://" + options.host + ":" + std::to_string(port)
@@ -112,23 +113,32 @@ struct HubServer::Impl {
     // Nodes register themselves with the node token; curators register by URL (accounts
     // arrive with the repository issue: until then only the node token may register).
     server.Post("/api/services", [this](const httplib::Request& req, httplib::Response& res) {
-      if (bearer(req) != token) throw protocol::Unauthorized("registering a node needs the node token");
+      require_node_or_curator(req, "registering a node");
       json body = json::parse(req.body, nullptr, false);
       if (!body.is_object() || !body.contains("url") || !body["url"].is_string())
         throw InvalidInput("expected {\"url\": \"http://node:port\"}");
       ServiceInfo info = services->add(body["url"].get<std::string>());
       registrations++;
       res.status = 201;
-      res.set_content(json{{"url", info.url}, {"operations", info.service["operations"].size()}}.dump(),
+      json names = json::array();
+      for (const auto& op : info.service["operations"]) names.push_back(op.value("name", ""));
+      res.set_content(json{{"url", info.url}, {"operations", names.size()}, {"operation_names", names}}.dump(),
                       "application/json");
     });
     job_routes();
     server.Delete("/api/services", [this](const httplib::Request& req, httplib::Response& res) {
-      if (bearer(req) != token) throw protocol::Forbidden("removing a node needs the node token");
+      require_node_or_curator(req, "removing a node");
       std::string url = req.get_param_value("url");
       if (!services->remove(url)) throw protocol::NotFound("no registered node " + url);
       res.status = 204;
     });
+  }
+
+  // The node token, or a curator's session/API token once the accounts layer is plugged in.
+  void require_node_or_curator(const httplib::Request& req, const std::string& what) {
+    if (!token.empty() && bearer(req) == token) return;
+    if (!service_curator_check) throw protocol::Unauthorized(what + " needs the node token");
+    service_curator_check(req);
   }
 
   // POST /api/jobs: multipart fields `workflow` (XML) and `input` (the mesh, streamed to disk)
@@ -315,5 +325,8 @@ bool HubServer::is_ready() const { return !impl_->ready_condition || impl_->read
 std::size_t HubServer::registered_nodes() const { return impl_->services->list().size(); }
 std::size_t HubServer::registrations_since_start() const { return impl_->registrations; }
 httplib::Server& HubServer::http() { return impl_->server; }
+void HubServer::set_service_curator_check(std::function<void(const httplib::Request&)> require) {
+  impl_->service_curator_check = std::move(require);
+}
 
 }  // namespace meshflow::web

@@ -14,6 +14,7 @@
 
 namespace httplib {
 class Server;
+struct Request;
 }
 
 namespace meshflow::web {
@@ -49,6 +50,9 @@ class HubServer {
   bool is_ready() const;
   std::size_t registered_nodes() const;
   std::size_t registrations_since_start() const;  // node registrations since start()
+  // Lets POST/DELETE /api/services by people too: `require` throws unless the request comes
+  // from a curator (the accounts layer sets it); the node token is accepted as before.
+  void set_service_curator_check(std::function<void(const httplib::Request&)> require);
 
   httplib::Server& http();  // for the layers that add routes
 

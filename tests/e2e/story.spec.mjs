@@ -234,7 +234,15 @@ test('a curator registers a node by URL and adds a static workflow', { timeout: 
   await page.getByRole('button', { name: 'Register' }).click();
   await page.waitForSelector('#n-result .ok');
   assert.match(await page.locator('#n-list').textContent(), new RegExp(node.url.replace(/[.:/]/g, '\\$&')));
+  assert.ok(await page.locator('#n-result li').count() >= 7, 'the node\'s operations are listed');
   await shot(page, 'curator');
+  await page.getByLabel('Name').fill('Hole filling by hand (documentation)');
+  await page.getByLabel('Description').fill('A documentation workflow: fill every hole, then smooth.');
+  await page.getByLabel('Operations it uses').selectOption(['FillHoles', 'LaplacianSmoothing']);
+  await page.getByRole('button', { name: 'Add', exact: true }).click();
+  await page.waitForURL(/#\/workflow\//);
+  await page.waitForSelector('main h1:has-text("Hole filling by hand")');
+  await shot(page, 'static-workflow');
   assertNoConsoleErrors(page);
   await page.context().close();
 });

@@ -455,7 +455,7 @@ async function curator() {
     try {
       const r = await api('POST', '/api/services', { url: el.querySelector('#n-url').value.trim() });
       operationsCache = null;
-      const names = Array.isArray(r.operations) ? r.operations.map((o) => (typeof o === 'string' ? o : o.name)) : null;
+      const names = Array.isArray(r.operation_names) ? r.operation_names : null;
       box.innerHTML = `<p class="ok">Registered ${esc(r.url)}: ${names ? `${names.length} operations` : `${esc(r.operations)} operations`}.</p>${names ? `<ul>${names.map((n) => `<li>${esc(n)}</li>`).join('')}</ul>` : ''}`;
       listNodes();
     } catch (e) { box.innerHTML = `<p class="error" role="alert">${esc(errorText(e))}</p>`; }
