@@ -8,8 +8,8 @@
 //
 // The steps talk through part files (mesh/part_files.h) in a parts directory: part-<i>.mfp
 // from the partition, part-<i>.simplified.mfp (with quadrics) from the workers.
-// Not yet as the issue asks: the partition holds the input in memory, the workers are threads
-// of this process (no nodes), and the seam pass runs on the whole merged mesh in memory.
+// Not yet as the issue asks: the partition holds the input in memory, the workers are local
+// processes or threads (no nodes), and the seam pass runs on the whole merged mesh in memory.
 
 #include <cstddef>
 #include <functional>
