@@ -59,6 +59,7 @@ struct HubRoutes {
       : repo(args.data), accounts(args.data, repo), auth(accounts) {
     web::add_account_routes(hub, auth);
     web::add_repository_routes(hub, repo, auth);
+    hub.set_service_curator_check([this](const httplib::Request& req) { auth.require(req, "curator"); });
     web::add_ui_routes(hub.http(), web::default_ui_dir());
   }
 };

@@ -199,8 +199,11 @@ test('sign up, save Mesh Repairing, find it by purpose, run it, my workflows', {
   await page.getByLabel('Operation').selectOption('LaplacianSmoothing');
   await page.getByRole('button', { name: 'Add step', exact: true }).click();
   await page.locator('input[data-param="iterations"]').fill('-3');
+  await page.getByLabel('Smoothing', { exact: true }).check();
   await page.getByRole('button', { name: 'Save' }).click();
-  await page.waitForSelector('.step .step-error');
+  await page.waitForSelector('.step .step-error').catch(async (e) => {
+    throw new Error(`no error at the step; the page says: ${await page.locator('#b-error').textContent()}`, { cause: e });
+  });
   await shot(page, 'builder-error');
   assertNoConsoleErrors(page, [/\/api\/workflows$/]);
   await page.context().close();
@@ -239,6 +242,7 @@ test('a curator registers a node by URL and adds a static workflow', { timeout: 
   await page.getByLabel('Name').fill('Hole filling by hand (documentation)');
   await page.getByLabel('Description').fill('A documentation workflow: fill every hole, then smooth.');
   await page.getByLabel('Operations it uses').selectOption(['FillHoles', 'LaplacianSmoothing']);
+  await page.getByLabel('Purposes').selectOption(['HoleFilling', 'Smoothing']);
   await page.getByRole('button', { name: 'Add', exact: true }).click();
   await page.waitForURL(/#\/workflow\//);
   await page.waitForSelector('main h1:has-text("Hole filling by hand")');

@@ -336,6 +336,10 @@ TEST(Hub, LongRunsAnswerWithATaskThatTheEnginePollsAndCancelStopsThem) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   ASSERT_TRUE(running);
+  // The event stream has connected and seen the step run before we cancel (curl may start late
+  // on a loaded machine).
+  for (int i = 0; i < 200 && slurp(dir.file("events.txt")).find("\"state\":\"running\"") == std::string::npos; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
   auto cancelled_at = std::chrono::steady_clock::now();
   EXPECT_EQ(protocol::http_request("DELETE", hub + "/api/jobs/" + long_id).status, 202);
   json ended = wait_for(hub, long_id, std::chrono::seconds(30));

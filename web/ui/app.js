@@ -282,7 +282,7 @@ async function builder() {
   const byName = Object.fromEntries(ops.map((o) => [o.name, o]));
   const state = { steps: [], errors: {} };
   const el = view('New workflow', `
-    <form id="builder">
+    <form id="builder" novalidate>
       <label for="b-name">Name</label><input id="b-name" type="text" required>
       <label for="b-desc">Description</label><textarea id="b-desc" rows="3"></textarea>
       <fieldset><legend>Purposes</legend><div id="b-domains" class="row">${ds.length ? ds.map((d, i) => `<div><input type="checkbox" id="b-d${i}" value="${esc(d.name)}"> <label for="b-d${i}" style="display:inline">${esc(d.label)}</label></div>`).join('') : '<span class="muted">The hub lists no purposes.</span>'}</div></fieldset>
@@ -405,6 +405,9 @@ async function builder() {
     const errorBox = el.querySelector('#b-error');
     errorBox.textContent = ''; state.errors = {};
     if (!loggedIn()) { errorBox.textContent = 'Log in or sign up to save workflows.'; return; }
+    // The form does not block on the browser's checks (novalidate): the hub validates the
+    // workflow and its answer is shown at the step it names.
+    if (!el.querySelector('#b-name').value.trim()) { errorBox.textContent = 'Give the workflow a name.'; el.querySelector('#b-name').focus(); return; }
     const body = { name: el.querySelector('#b-name').value.trim(), description: el.querySelector('#b-desc').value.trim(),
       domains: [...el.querySelectorAll('#b-domains input:checked')].map((c) => c.value), xml };
     try {
