@@ -74,19 +74,27 @@ int main(int argc, char** argv) {
         "PREFIX wo: <http://meshflow.org/ontology/wo#> SELECT ?w ?n WHERE { ?w wo:creator <http://meshflow.org/user/user7> ; wo:name ?n }"};
     std::atomic<long> done{0};
     std::atomic<bool> stop{false};
+  std::atomic<long> failed{0};
     std::vector<std::thread> clients;
     auto t1 = Clock::now();
     for (int c = 0; c < 8; ++c)
       clients.emplace_back([&, c] {
         for (int i = c; !stop; ++i) {
-          repo.store().query(sparql[i % sparql.size()]);
-          ++done;
+          try {
+            QueryLimits slow;
+            slow.timeout = std::chrono::milliseconds(120000);
+            repo.store().query(sparql[i % sparql.size()], slow);
+            ++done;
+          } catch (const std::exception& e) {
+            ++failed;
+          }
         }
       });
     std::this_thread::sleep_for(std::chrono::seconds(10));
     stop = true;
     for (auto& t : clients) t.join();
     qps = done / (ms_since(t1) / 1000.0);
+    if (failed) std::printf("sparql_failed %ld\n", failed.load());
   }
   std::filesystem::remove_all(dir);
   std::printf("workflows %d\nload_s %.1f\nsearch_p50_ms %.1f\nsearch_p95_ms %.1f\nsparql_qps_8 %.1f\n",

@@ -12,6 +12,7 @@
 #include "engine/workflow_parser.h"
 #include "mesh/errors.h"
 #include "repository/embedded.h"
+#include "repository/search_index.h"
 #include "services/operation.h"
 
 namespace meshflow::repository {
@@ -48,10 +49,6 @@ std::string fresh_id() {
   s << std::hex << rng();
   return s.str();
 }
-std::string lower(std::string s) {
-  for (auto& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
 // The words of a free-text query, lowercased, with nothing that could leave a SPARQL string.
 std::vector<std::string> words(const std::string& q) {
   std::vector<std::string> out;
@@ -67,11 +64,6 @@ std::vector<std::string> words(const std::string& q) {
   if (!cur.empty()) out.push_back(cur);
   if (out.size() > 8) out.resize(8);
   return out;
-}
-std::size_t count_of(const std::string& hay, const std::string& needle) {
-  std::size_t n = 0;
-  for (auto p = hay.find(needle); p != std::string::npos; p = hay.find(needle, p + 1)) ++n;
-  return n;
 }
 
 struct Example {
@@ -111,6 +103,7 @@ std::vector<Example> examples() {
 struct Repository::Impl {
   std::filesystem::path dir;
   std::unique_ptr<RdfStore> store;
+  std::unique_ptr<SearchIndex> index;
   std::map<std::string, std::string> purpose_parent;  // local name -> parent ("" = root)
   std::map<std::string, std::string> purpose_label;
   std::vector<std::string> datatypes;
@@ -203,12 +196,13 @@ struct Repository::Impl {
     auto lit = [&](const std::string& p, const std::string& v, const std::string& dt = "") {
       t.push_back({s, wo(p), v, true, dt});
     };
-    auto res = [&](const std::string& p, const std::string& o) { t.push_back({s, p, o}); };
+    auto res = [&](const std::string& p, const std::string& o) { t.push_back({s, p, o, false, ""}); };
     res(kRdfType, wo("Workflow"));
     res(kRdfType, wo(w.type == "static" ? "WorkflowStatic" : "WorkflowExecutable"));
     lit("name", w.name);
     lit("description", w.description);
-    lit("created", now_utc(), kXsdDateTime);
+    const std::string created = now_utc();
+    lit("created", created, kXsdDateTime);
     res(wo("creator"), std::string(kUserBase) + w.creator);
     for (const auto& d : closure(w.domains)) res(wo("workflowDomain"), wo(d));
     std::set<std::string> seen;
@@ -228,30 +222,18 @@ struct Repository::Impl {
       lit("xmlFile", "workflows/" + id + ".xml");
     }
     store->add(t);
+    index->put({id, w.name, w.description, w.creator, created,
+                most_specific(closure(w.domains)), w.type});
     return id;
   }
 
-  WorkflowSummary summary(const std::string& id, const std::string& name,
-                          const std::string& description, const std::string& created) {
-    WorkflowSummary s{id, name, description, "", created, {}, "executable"};
-    auto r = store->query(kPrefixes + "SELECT ?p ?o WHERE { <" + kWorkflowBase + id +
-                          "> ?p ?o }");
-    std::vector<std::string> domains;
-    for (auto& row : r.rows) {
-      auto p = local_name(row[0].value);
-      if (p == "creator") s.creator = local_name(row[1].value);
-      if (p == "workflowDomain") domains.push_back(local_name(row[1].value));
-      if (p == "type" && local_name(row[1].value) == "WorkflowStatic") s.type = "static";
-    }
-    s.domains = most_specific(domains);
-    return s;
-  }
 };
 
 Repository::Repository(const std::filesystem::path& data_dir) : impl_(std::make_unique<Impl>()) {
   impl_->dir = data_dir / "repository";
   impl_->store = std::make_unique<RdfStore>(impl_->dir);
   bool first = impl_->store->created_now();
+  impl_->index = std::make_unique<SearchIndex>(impl_->dir / "search.sqlite");
   if (first) impl_->store->load_rdfxml(embedded::kOntology, "http://meshflow.org/ontology/wo");
   impl_->load_ontology_maps();
   if (first) {
@@ -262,6 +244,11 @@ Repository::Repository(const std::filesystem::path& data_dir) : impl_(std::make_
     }
   } else {
     impl_->examples_loaded = examples().size();
+    if (impl_->index->empty()) {  // a store from before the index: rebuild it from the triples
+      auto r = impl_->store->query(kPrefixes + "SELECT ?w WHERE { ?w a wo:Workflow }");
+      for (auto& row : r.rows)
+        if (auto d = get(local_name(row[0].value))) impl_->index->put(*d);
+    }
   }
 }
 
@@ -316,19 +303,20 @@ std::optional<std::string> Repository::xml(const std::string& id) {
 bool Repository::remove(const std::string& id) {
   if (!get(id)) return false;
   impl_->store->remove_subject(std::string(kWorkflowBase) + id);
+  impl_->index->remove(id);
   std::error_code ec;
   std::filesystem::remove(impl_->xml_path(id), ec);
   return true;
 }
 
 SearchPage Repository::search(const SearchQuery& q) {
-  // One basic graph pattern, FILTER last (GROUND.md §1): rasqal joins it in one pass.
-  std::string cls = "Workflow";
+  // Filters of meaning: one basic graph pattern over the triples, selecting ids only (the
+  // purpose closure is stored, so no path or UNION). Text and order: the FTS5 side index.
+  std::string cls;
   if (q.type == "static") cls = "WorkflowStatic";
   else if (q.type == "executable") cls = "WorkflowExecutable";
   else if (!q.type.empty())
     throw InvalidInput("type must be static or executable, not \"" + q.type + "\"");
-  // The most selective patterns first: rasqal joins in the order written.
   std::string where;
   auto filter = [&](const std::string& value, const char* what, const std::string& pattern) {
     if (value.empty()) return;
@@ -337,45 +325,30 @@ SearchPage Repository::search(const SearchQuery& q) {
   };
   if (!q.domain.empty() && !impl_->purpose_parent.count(q.domain))
     throw InvalidInput("unknown purpose \"" + q.domain + "\"");
+  filter(q.creator, "creator", "?w wo:creator <" + std::string(kUserBase) + q.creator + ">");
+  filter(q.operation, "operation", "?w wo:usesOperation wo:" + q.operation);
   filter(q.domain, "domain", "?w wo:workflowDomain wo:" + q.domain);
   filter(q.input, "input", "?w wo:inputType wo:" + q.input);
   filter(q.output, "output", "?w wo:outputType wo:" + q.output);
-  filter(q.operation, "operation", "?w wo:usesOperation wo:" + q.operation);
-  filter(q.creator, "creator", "?w wo:creator <" + std::string(kUserBase) + q.creator + ">");
-  where += "?w a wo:" + cls + " ; wo:name ?n ; wo:description ?d ; wo:created ?c .\n";
+  filter(cls, "type", "?w a wo:" + cls);
+  std::optional<std::set<std::string>> allowed;
+  if (!where.empty()) {
+    auto r = impl_->store->query(kPrefixes + "SELECT ?w WHERE {\n" + where + "}");
+    allowed.emplace();
+    for (auto& row : r.rows) allowed->insert(local_name(row[0].value));
+  }
   auto terms = words(q.q);
-  if (!terms.empty()) {
-    where += "FILTER(";
-    for (std::size_t i = 0; i < terms.size(); ++i) {
-      if (i) where += " && ";
-      where += "(CONTAINS(LCASE(?n), \"" + terms[i] + "\") || CONTAINS(LCASE(?d), \"" +
-               terms[i] + "\"))";
-    }
-    where += ")\n";
-  }
-  auto r = impl_->store->query(kPrefixes + "SELECT ?w ?n ?d ?c WHERE {\n" + where + "}");
-  struct Hit { double score; std::string created; std::size_t row; };
-  std::vector<Hit> hits;
-  for (std::size_t i = 0; i < r.rows.size(); ++i) {
-    double score = 0;
-    auto n = lower(r.rows[i][1].value), d = lower(r.rows[i][2].value);
-    for (const auto& t : terms) score += 3.0 * count_of(n, t) + count_of(d, t);
-    hits.push_back({score, r.rows[i][3].value, i});
-  }
-  std::sort(hits.begin(), hits.end(), [](const Hit& a, const Hit& b) {
-    if (a.score != b.score) return a.score > b.score;
-    if (a.created != b.created) return a.created > b.created;
-    return a.row < b.row;
-  });
+  std::vector<std::string> ordered = terms.empty() ? impl_->index->newest_first()
+                                                   : impl_->index->match(terms);
+  std::vector<std::string> hits;
+  for (auto& id : ordered)
+    if (!allowed || allowed->count(id)) hits.push_back(std::move(id));
   SearchPage page;
   page.total = hits.size();
   page.offset = q.offset;
   page.limit = std::min<std::uint64_t>(q.limit, 200);
-  for (auto i = q.offset; i < hits.size() && i < q.offset + page.limit; ++i) {
-    auto& row = r.rows[hits[i].row];
-    page.workflows.push_back(impl_->summary(local_name(row[0].value), row[1].value,
-                                            row[2].value, row[3].value));
-  }
+  for (auto i = q.offset; i < hits.size() && i < q.offset + page.limit; ++i)
+    if (auto w = impl_->index->summary(hits[i])) page.workflows.push_back(*w);
   return page;
 }
 

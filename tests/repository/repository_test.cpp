@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <random>
+#include <set>
 
 #include "mesh/errors.h"
 #include "repository/repository.h"
@@ -62,12 +63,18 @@ TEST_F(RepositoryTest, APurposeFindsTheWorkflowsOfItsSubPurposes) {
   EXPECT_THROW(repo->search(q), InvalidInput);
 }
 
-TEST_F(RepositoryTest, FreeTextRanksNameMatchesFirst) {
+TEST_F(RepositoryTest, FreeTextNeedsEveryWord) {
   SearchQuery q;
   q.q = "repair";
   auto page = repo->search(q);
-  ASSERT_GE(page.total, 2u);
-  EXPECT_EQ(page.workflows[0].id, "mesh-repairing");
+  ASSERT_EQ(page.total, 2u);  // the two with "repair" in name and description, not the others
+  std::set<std::string> ids{page.workflows[0].id, page.workflows[1].id};
+  EXPECT_EQ(ids, (std::set<std::string>{"mesh-repairing", "conditional-repair"}));
+  q.q = "laplacian smooth";  // every word must appear, as a word prefix
+  page = repo->search(q);
+  EXPECT_TRUE(finds(q, "smoothing-loop"));
+  EXPECT_TRUE(finds(q, "mesh-repairing"));
+  EXPECT_FALSE(finds(q, "conditional-repair"));
   q.q = "\"; DROP } # nothing";
   EXPECT_EQ(repo->search(q).total, 0u);
 }

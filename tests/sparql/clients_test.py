@@ -110,7 +110,7 @@ try:
     check(code == 200 and "Mesh Repairing" in names, f"domain=Repair finds Mesh Repairing: {names}")
     code, _, body = http("GET", "/api/workflows?q=repair&limit=1")
     d = json.loads(body)
-    check(d["total"] >= 2 and len(d["workflows"]) == 1 and d["workflows"][0]["id"] == "mesh-repairing",
+    check(d["total"] == 2 and len(d["workflows"]) == 1 and d["workflows"][0]["id"] in ("mesh-repairing", "conditional-repair"),
           f"q=repair ranked and paged: {d}")
     code, _, body = http("GET", "/api/workflows?domain=Nope")
     check(code == 400, f"unknown domain -> 400 (got {code})")

@@ -1,0 +1,35 @@
+#pragma once
+// The side index of search (DESIGN §7 allows it for free text): one row per workflow with the
+// fields a result list shows, and an FTS5 table over name and description for ranking. Written
+// right after the triples of the workflow, removed with them. Filters of meaning (purpose, data
+// type, operation, creator, kind) are never answered from here, only from the triples.
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "repository/repository.h"
+
+namespace meshflow::repository {
+
+class SearchIndex {
+ public:
+  explicit SearchIndex(const std::filesystem::path& file);  // \throws IoError
+  ~SearchIndex();
+  void put(const WorkflowSummary& w);
+  void remove(const std::string& id);
+  bool empty();
+  // Ids whose name or description hold every word (as a word prefix), best bm25 first (name
+  // weighs 3, description 1).
+  std::vector<std::string> match(const std::vector<std::string>& words);
+  std::vector<std::string> newest_first();
+  std::optional<WorkflowSummary> summary(const std::string& id);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace meshflow::repository
