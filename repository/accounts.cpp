@@ -9,12 +9,9 @@ namespace meshflow::repository {
 namespace {
 
 std::string hex(const unsigned char* p, std::size_t n) {
-  static const char* digits = "0123456789abcdef";
-  std::string s;
-  for (std::size_t i = 0; i < n; ++i) {
-    s += digits[p[i] >> 4];
-    s += digits[p[i] & 15];
-  }
+  std::string s(2 * n + 1, '\0');
+  sodium_bin2hex(s.data(), s.size(), p, n);
+  s.pop_back();
   return s;
 }
 
@@ -133,10 +130,14 @@ std::optional<Account> Accounts::verify(const std::string& name, const std::stri
   return Account{name, role};
 }
 
+std::string random_hex(std::size_t bytes) {
+  std::string raw(bytes, '\0');
+  randombytes_buf(raw.data(), bytes);
+  return hex(reinterpret_cast<const unsigned char*>(raw.data()), bytes);
+}
+
 std::string Accounts::new_token(const std::string& name) {
-  unsigned char bytes[32];
-  randombytes_buf(bytes, sizeof bytes);
-  std::string token = "mft_" + hex(bytes, sizeof bytes);
+  std::string token = "mft_" + random_hex(32);
   std::lock_guard lock(impl_->mutex);
   Stmt insert(impl_->db, "INSERT INTO tokens(digest, name) VALUES(?, ?)");
   insert.bind(1, digest(token)).bind(2, name);

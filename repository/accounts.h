@@ -14,6 +14,9 @@
 
 namespace meshflow::repository {
 
+// `bytes` random bytes (libsodium's CSPRNG) as lowercase hex: session ids, tokens.
+std::string random_hex(std::size_t bytes);
+
 struct Account {
   std::string name, role;
 };

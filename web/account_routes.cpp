@@ -14,18 +14,6 @@ namespace {
 using nlohmann::json;
 constexpr const char* kCookie = "meshflow_session";
 
-std::string random_hex(std::size_t bytes) {
-  std::string raw(bytes, '\0');
-  randombytes_buf(raw.data(), bytes);
-  static const char* digits = "0123456789abcdef";
-  std::string s;
-  for (unsigned char c : raw) {
-    s += digits[c >> 4];
-    s += digits[c & 15];
-  }
-  return s;
-}
-
 std::string cookie_value(const httplib::Request& req, const std::string& name) {
   std::string header = req.get_header_value("Cookie");
   std::size_t pos = 0;
@@ -71,8 +59,8 @@ void reply_session(httplib::Response& res, Auth& auth, const repository::Account
 }  // namespace
 
 std::pair<std::string, Auth::Session> Auth::open_session(const repository::Account& account) {
-  Session s{account, random_hex(24)};
-  std::string id = random_hex(32);
+  Session s{account, repository::random_hex(24)};
+  std::string id = repository::random_hex(32);
   std::lock_guard lock(mutex_);
   sessions_[id] = s;
   return {id, s};

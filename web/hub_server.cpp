@@ -1,7 +1,6 @@
 #include "web/hub_server.h"
 
 #include <httplib.h>
-#include <openssl/rand.h>
 
 #include <chrono>
 #include <fstream>
@@ -11,6 +10,7 @@
 
 #include "mesh/errors.h"
 #include "protocol/http_server.h"
+#include "repository/accounts.h"
 #include "web/job_manager.h"
 #include "web/service_registry.h"
 
@@ -19,24 +19,12 @@ namespace {
 
 using nlohmann::json;
 
-std::string random_token() {
-  unsigned char bytes[32];
-  if (RAND_bytes(bytes, sizeof bytes) != 1) throw IoError("no randomness for the node token");
-  static const char* hex = "0123456789abcdef";
-  std::string token;
-  for (unsigned char b : bytes) {
-    token += hex[b >> 4];
-    token += hex[b & 15];
-  }
-  return token;
-}
-
 // The node token: made on first start, kept in DATA/node.token (mode 0600).
 std::string load_or_create_token(const std::filesystem::path& file) {
   std::ifstream in(file);
   std::string token;
   if (in && std::getline(in, token) && token.size() >= 32) return token;
-  token = random_token();
+  token = repository::random_hex(32);
   std::filesystem::path tmp = file;
   tmp += ".tmp";
   {
