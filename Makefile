@@ -33,13 +33,15 @@ fuzz: deps
 	  -DCMAKE_CXX_FLAGS="-fsanitize=fuzzer-no-link,address,undefined" \
 	  -DMESHFLOW_BUILD_TESTS=OFF -DMESHFLOW_BUILD_FUZZERS=ON $(LAUNCHER)
 	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target meshflow_fuzzers
-	@# Seed the correction fuzzer with real corrections made by the tool itself.
-	@mkdir -p $(FUZZ_BUILD)/tests/fuzz/corpus-work/correction
+	@# Seed the correction and part fuzzers with real files made by the tool itself.
+	@mkdir -p $(FUZZ_BUILD)/tests/fuzz/corpus-work/correction $(FUZZ_BUILD)/tests/fuzz/corpus-work/part
 	@if [ -x $(BUILD)/meshflow ]; then \
 	  $(BUILD)/meshflow op LaplacianSmoothing tests/fuzz/corpus/off/coff.off -o $(FUZZ_BUILD)/seed.ply \
 	    --correction $(FUZZ_BUILD)/tests/fuzz/corpus-work/correction/seed-ls.mfc >/dev/null 2>&1 || true; \
 	  $(BUILD)/meshflow op FillHoles ../shared/data/meshes/defects/triangular_hole.off -o $(FUZZ_BUILD)/seed.ply \
 	    --correction $(FUZZ_BUILD)/tests/fuzz/corpus-work/correction/seed-fh.mfc >/dev/null 2>&1 || true; \
+	  $(BUILD)/meshflow partition ../shared/data/meshes/defects/triangular_hole.off --vertices-per-part 1000 \
+	    --parts-dir $(FUZZ_BUILD)/tests/fuzz/corpus-work/part >/dev/null 2>&1 || true; \
 	fi
 	tests/fuzz/run.sh $(FUZZ_BUILD)/tests/fuzz $(FUZZ_SECONDS)
 
