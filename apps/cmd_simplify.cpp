@@ -28,7 +28,8 @@ struct SimplifyArgs {
 // D/partition.txt: what the merge needs from the partition.
 void write_partition_info(const std::string& dir, std::size_t parts, double diagonal) {
   std::ofstream out(dir + "/partition.txt");
-  out << "parts " << parts << "\ndiagonal " << std::to_string(diagonal) << "\n";
+  out.precision(17);  // the diagonal round-trips exactly, whatever the mesh's scale
+  out << "parts " << parts << "\ndiagonal " << diagonal << "\n";
   if (!out) throw IoError(dir + "/partition.txt: cannot write");
 }
 
@@ -63,8 +64,9 @@ void add_simplify_command(CLI::App& app, int& exit_status) {
       throw InvalidInput("--node-urls: dispatch to mesh nodes is not implemented yet; use --workers");
     if (args->max_error <= 0) throw InvalidInput("--max-error must be > 0 (% of the diagonal)");
     mesh::Mesh input = mesh::read_mesh(args->in);
+    const double diagonal = mesh::bounding_box(input).diagonal();
     parallel::DistributedParams params;
-    params.max_error = args->max_error / 100.0 * mesh::bounding_box(input).diagonal();
+    params.max_error = args->max_error / 100.0 * diagonal;
     params.vertices_per_part = args->vertices_per_part;
     params.workers = args->workers ? args->workers : std::max(1u, std::thread::hardware_concurrency());
     params.progress = terminal_progress();
@@ -80,7 +82,7 @@ void add_simplify_command(CLI::App& app, int& exit_status) {
     } cleanup{temporary ? params.parts_dir : ""};
     parallel::DistributedReport report;
     std::size_t parts = parallel::partition_to_files(input, params.vertices_per_part, params.parts_dir, report);
-    write_partition_info(params.parts_dir, parts, mesh::bounding_box(input).diagonal());
+    write_partition_info(params.parts_dir, parts, diagonal);
     input = {};
     report.independent_sets = parallel::independent_sets(report.adjacency, params.workers);
     parallel::simplify_part_files(params.parts_dir, parts, params, report);
