@@ -71,6 +71,8 @@ PartFile decode_part(std::span<const std::uint8_t> bytes, const std::string& nam
   auto triangles = in.get<std::uint64_t>("the triangle count");
   auto has_quadrics = in.get<std::uint8_t>("the quadric flag");
   if (has_quadrics > 1) in.fail("quadric flag must be 0 or 1");
+  // The encoder sets the flag exactly when there are quadrics, so an empty part never has it.
+  if (has_quadrics && vertices == 0) in.fail("quadric flag set on a part without vertices");
   const std::uint64_t vertex_bytes = 8 + 12 + 1 + (has_quadrics ? 88 : 0);
   // Both counts must fit the bytes left before anything is allocated.
   if (vertices > in.remaining() / vertex_bytes || triangles > in.remaining() / 12 ||

@@ -145,6 +145,10 @@ TEST(PartFiles, RoundTripAndRefuseDamage) {
   EXPECT_THROW(mesh::decode_part(bytes, "p.mfp"), ParseError);
   bytes[0] = 'X';
   EXPECT_THROW(mesh::decode_part(bytes, "p.mfp"), ParseError);
+  // Found by fuzz_part: an empty part with the quadric flag set would not encode back the same.
+  std::vector<std::uint8_t> empty_with_flag = mesh::encode_part(mesh::PartFile{});
+  empty_with_flag.back() = 1;
+  EXPECT_THROW(mesh::decode_part(empty_with_flag, "p.mfp"), ParseError);
 }
 
 }  // namespace
