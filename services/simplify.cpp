@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <queue>
 
 #include "mesh/errors.h"
 
@@ -52,16 +51,76 @@ struct Quadric {
 
 constexpr double kBoundaryWeight = 100.0;
 
+// A 4-ary min-heap: half the levels of a binary one, and a node's children share cache lines,
+// which matters because the heap's cache misses are most of a simplification's time.
+template <typename T, typename Less>
+class QuaternaryHeap {
+ public:
+  bool empty() const { return items_.empty(); }
+  std::size_t size() const { return items_.size(); }
+  void reserve(std::size_t n) { items_.reserve(n); }
+  // Appends without ordering; call heapify() before the next pop.
+  void append(const T& item) { items_.push_back(item); }
+  void heapify() {
+    for (std::size_t i = items_.size() / 4 + 1; i-- > 0;) sift_down(i);
+  }
+  void push(const T& item) {
+    items_.push_back(item);
+    std::size_t i = items_.size() - 1;
+    while (i > 0) {
+      std::size_t parent = (i - 1) / 4;
+      if (!less_(items_[i], items_[parent])) break;
+      std::swap(items_[i], items_[parent]);
+      i = parent;
+    }
+  }
+  T pop() {
+    T top = items_.front();
+    items_.front() = items_.back();
+    items_.pop_back();
+    if (!items_.empty()) sift_down(0);
+    return top;
+  }
+  template <typename Pred>
+  void remove_if(Pred pred) {
+    items_.erase(std::remove_if(items_.begin(), items_.end(), pred), items_.end());
+    heapify();
+  }
+
+ private:
+  void sift_down(std::size_t i) {
+    const std::size_t n = items_.size();
+    T item = items_[i];
+    for (;;) {
+      std::size_t first = 4 * i + 1;
+      if (first >= n) break;
+      std::size_t best = first;
+      for (std::size_t c = first + 1; c < std::min(first + 4, n); ++c)
+        if (less_(items_[c], items_[best])) best = c;
+      if (!less_(items_[best], item)) break;
+      items_[i] = items_[best];
+      i = best;
+    }
+    items_[i] = item;
+  }
+  std::vector<T> items_;
+  Less less_;
+};
+
 class Simplifier {
  public:
   Simplifier(const mesh::Mesh& input, const SimplifyParams& params) : params_(params) {
     std::size_t V = input.positions.size();
-    pos_.resize(V);
-    for (std::size_t v = 0; v < V; ++v)
-      pos_[v] = {input.positions[v][0], input.positions[v][1], input.positions[v][2]};
+    pos_ = input.positions;
     tris_ = input.triangles;
     tri_alive_.assign(tris_.size(), true);
     vt_.resize(V);
+    {  // exact capacities: no growth, no freed fragments left behind
+      std::vector<std::uint32_t> degree(V, 0);
+      for (const auto& tri : tris_)
+        for (Index v : tri) degree[v]++;
+      for (std::size_t v = 0; v < V; ++v) vt_[v].reserve(degree[v]);
+    }
     for (std::size_t t = 0; t < tris_.size(); ++t) {
       const auto& tri = tris_[t];
       if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) {
@@ -79,7 +138,6 @@ class Simplifier {
     if (params_.locked)
       for (std::size_t v = 0; v < V && v < params_.locked->size(); ++v)
         if ((*params_.locked)[v]) lock_[v] = true;
-    stamp_.assign(V, 0);
     alive_.assign(V, false);
     for (std::size_t v = 0; v < V; ++v) alive_[v] = !vt_[v].empty();
     if (params_.quadrics) {
@@ -87,13 +145,13 @@ class Simplifier {
     } else for (std::size_t t = 0; t < tris_.size(); ++t) {
       const auto& tri = tris_[t];
       if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) continue;
-      Vec n = cross(sub(pos_[tri[1]], pos_[tri[0]]), sub(pos_[tri[2]], pos_[tri[0]]));
+      Vec n = cross(sub(at(tri[1]), at(tri[0])), sub(at(tri[2]), at(tri[0])));
       double len = std::sqrt(dot(n, n));
       if (len == 0) continue;
       Vec u{n[0] / len, n[1] / len, n[2] / len};
       double area = 0.5 * len;
       Quadric q;
-      q.add_plane(u, -dot(u, pos_[tri[0]]), area);
+      q.add_plane(u, -dot(u, at(tri[0])), area);
       q.weight = area;
       for (Index v : tri) quadric_[v] += q;
     }
@@ -102,20 +160,27 @@ class Simplifier {
   }
 
   SimplifyResult run() {
+    // Edges are about 1.5 x triangles; compact() keeps the heap under 1.25 x its live size, so
+    // this one allocation holds it to the end.
+    heap_.reserve(tris_.size() * 15 / 8 + 1024);
     for (std::size_t v = 0; v < pos_.size(); ++v)
-      if (alive_[v]) push_edges_of(static_cast<Index>(v));
+      if (alive_[v]) push_edges_of(static_cast<Index>(v), /*only_greater=*/true);
+    heap_.heapify();
+    compact_at_ = std::max<std::size_t>(heap_.size() * 5 / 4, 1024);
     SimplifyResult result;
     std::size_t start_vertices = live_vertices_;
     while (!heap_.empty()) {
       if (params_.target_vertices && live_vertices_ <= params_.target_vertices) break;
-      Candidate c = heap_.top();
-      heap_.pop();
-      if (!alive_[c.keep] || !alive_[c.drop] || stamp_[c.keep] != c.keep_stamp || stamp_[c.drop] != c.drop_stamp)
-        continue;
-      if (params_.max_error > 0 && c.rms > params_.max_error) break;
-      if (!collapse(c)) continue;
+      Candidate c = heap_.pop();
+      if (!alive_[c.keep] || !alive_[c.drop]) continue;
+      Placement place;
+      if (!evaluate(c.keep, c.drop, place) || place.keep != c.keep || rank_of(place) != c.cost)
+        continue;  // stale: an end changed since, and the edge was pushed again with its new cost
+      if (params_.max_error > 0 && place.rms > params_.max_error) break;  // ranked by rms in this mode
+      if (!collapse(c.keep, c.drop, place.position)) continue;
       result.collapses++;
-      result.max_rms_error = std::max(result.max_rms_error, c.rms);
+      result.max_rms_error = std::max(result.max_rms_error, place.rms);
+      if (heap_.size() > compact_at_) compact();
       if ((result.collapses & 0x3fff) == 0) {
         if (params_.cancel && params_.cancel->load()) throw std::runtime_error("cancelled");
         if (params_.progress && start_vertices > 0)
@@ -127,40 +192,66 @@ class Simplifier {
   }
 
  private:
-  struct Candidate {
-    double cost, rms;
-    Index keep, drop;
-    std::uint32_t keep_stamp, drop_stamp;
-    Vec position;
-    bool operator<(const Candidate& o) const { return cost > o.cost; }  // min-heap
+  struct Placement {
+    double cost = 0, rms = 0;
+    Index keep = 0, drop = 0;
+    Vec position{};
   };
+  // A collapse in the heap, 12 bytes (the heap's cache misses are most of the time). Lazy
+  // deletion: when an end changes, its edges are pushed again with their new cost, and an entry
+  // whose cost no longer matches a fresh evaluation is dropped when it surfaces. The position is
+  // recomputed then too.
+  struct Candidate {
+    float cost;  // rank_of(): rms with a max error, else the quadric error
+    Index keep, drop;
+  };
+  struct Cheaper {
+    bool operator()(const Candidate& a, const Candidate& b) const { return a.cost < b.cost; }
+  };
+  float rank_of(const Placement& p) const { return static_cast<float>(params_.max_error > 0 ? p.rms : p.cost); }
 
+  bool stale(const Candidate& c) const {
+    if (!alive_[c.keep] || !alive_[c.drop]) return true;
+    Placement p;
+    return !evaluate(c.keep, c.drop, p) || p.keep != c.keep || rank_of(p) != c.cost;
+  }
+  // Drops the stale candidates so that the heap stays proportional to the live edges.
+  void compact() {
+    heap_.remove_if([&](const Candidate& c) { return stale(c); });
+    compact_at_ = std::max<std::size_t>(heap_.size() * 5 / 4, 1024);
+  }
+
+  // Boundary edges (one triangle) get a constraint plane; vertices on non-manifold edges (3+
+  // triangles) or whose triangles are not one fan are locked. Found from each vertex's
+  // triangles, without an edge table.
   void classify_edges() {
-    std::vector<std::uint64_t> keys;
-    for (std::size_t t = 0; t < tris_.size(); ++t) {
-      const auto& tri = tris_[t];
-      if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) continue;
-      for (int k = 0; k < 3; ++k) {
-        Index a = tri[k], b = tri[(k + 1) % 3];
-        keys.push_back(static_cast<std::uint64_t>(std::min(a, b)) << 32 | std::max(a, b));
+    std::vector<std::pair<Index, int>>& count = edge_count_;
+    for (std::size_t vi = 0; vi < pos_.size(); ++vi) {
+      const Index v = static_cast<Index>(vi);
+      if (!alive_[v]) continue;
+      count_edges(v, count);
+      for (auto [w, c] : count) {
+        if (c == 1) {
+          boundary_[v] = boundary_[w] = true;
+          if (v < w && wants_boundary_plane(v, w)) add_boundary_plane(v, w);
+        } else if (c > 2) {
+          lock_[v] = lock_[w] = true;  // non-manifold edge
+        }
       }
+      if (!lock_[v] && !is_disk(v, count)) lock_[v] = true;  // not one fan
     }
-    std::sort(keys.begin(), keys.end());
-    for (std::size_t i = 0; i < keys.size();) {
-      std::size_t j = i;
-      while (j < keys.size() && keys[j] == keys[i]) ++j;
-      Index a = static_cast<Index>(keys[i] >> 32), b = static_cast<Index>(keys[i] & 0xffffffff);
-      if (j - i == 1) {
-        boundary_[a] = boundary_[b] = true;
-        if (wants_boundary_plane(a, b)) add_boundary_plane(a, b);
-      } else if (j - i > 2) {
-        lock_[a] = lock_[b] = true;  // non-manifold edge
+  }
+
+  // For each neighbour w of v, the number of v's triangles on the edge (v, w).
+  void count_edges(Index v, std::vector<std::pair<Index, int>>& count) const {
+    count.clear();
+    for (Index t : vt_[v])
+      for (Index w : tris_[t]) {
+        if (w == v) continue;
+        auto it = std::find_if(count.begin(), count.end(), [&](auto& p) { return p.first == w; });
+        if (it == count.end()) count.emplace_back(w, 1);
+        else it->second++;
       }
-      i = j;
-    }
-    // Non-manifold vertices (fans that are not one disk) are locked too.
-    for (std::size_t v = 0; v < pos_.size(); ++v)
-      if (alive_[v] && !lock_[v] && !is_disk(static_cast<Index>(v))) lock_[v] = true;
   }
 
   bool wants_boundary_plane(Index a, Index b) const {
@@ -185,35 +276,26 @@ class Simplifier {
     for (Index t : vt_[a]) {
       const auto& tri = tris_[t];
       if (tri[0] != b && tri[1] != b && tri[2] != b) continue;
-      Vec n = cross(sub(pos_[tri[1]], pos_[tri[0]]), sub(pos_[tri[2]], pos_[tri[0]]));
-      Vec e = sub(pos_[b], pos_[a]);
+      Vec n = cross(sub(at(tri[1]), at(tri[0])), sub(at(tri[2]), at(tri[0])));
+      Vec e = sub(at(b), at(a));
       Vec p = cross(e, n);
       double len = std::sqrt(dot(p, p));
       if (len == 0) return;
       Vec u{p[0] / len, p[1] / len, p[2] / len};
       Quadric q;
-      q.add_plane(u, -dot(u, pos_[a]), kBoundaryWeight * dot(e, e));
+      q.add_plane(u, -dot(u, at(a)), kBoundaryWeight * dot(e, e));
       quadric_[a] += q;
       quadric_[b] += q;
       return;
     }
   }
 
-  // The triangles around v form one fan (a disk or a half-disk).
-  bool is_disk(Index v) const {
+  // The triangles around v form one fan (a disk or a half-disk): the number of neighbours is
+  // #triangles (closed) or #triangles+1 (open), every edge used once or twice, and exactly two
+  // used once when open. `count` is count_edges(v).
+  bool is_disk(Index v, const std::vector<std::pair<Index, int>>& count) const {
     const auto& ts = vt_[v];
-    if (ts.size() < 1) return true;
-    // Count, for each neighbour, how many of v's triangles use the edge (v, neighbour); the fan
-    // is one piece iff the number of neighbours is #triangles (closed) or #triangles+1 (open)
-    // with every edge used once or twice and exactly two used once when open.
-    std::vector<std::pair<Index, int>> count;
-    for (Index t : ts)
-      for (Index w : tris_[t]) {
-        if (w == v) continue;
-        auto it = std::find_if(count.begin(), count.end(), [&](auto& p) { return p.first == w; });
-        if (it == count.end()) count.emplace_back(w, 1);
-        else it->second++;
-      }
+    if (ts.empty()) return true;
     int ones = 0;
     for (auto& [w, c] : count) {
       if (c > 2) return false;
@@ -232,10 +314,12 @@ class Simplifier {
     out.erase(std::unique(out.begin(), out.end()), out.end());
   }
 
-  void push_edges_of(Index v) {
-    neighbours(v, scratch_);
-    std::vector<Index> around = scratch_;
-    for (Index w : around) push_candidate(v, w);
+  // Pushes the collapses of v's edges (with only_greater, those to higher ids: each edge once
+  // when called for every vertex, and without keeping the heap ordered: run() heapifies).
+  void push_edges_of(Index v, bool only_greater = false) {
+    neighbours(v, around_);
+    for (Index w : around_)
+      if (!only_greater || w > v) push_candidate(v, w, !only_greater);
   }
 
   bool is_boundary_edge(Index a, Index b) const {
@@ -247,49 +331,62 @@ class Simplifier {
     return n == 1;
   }
 
-  void push_candidate(Index a, Index b) {
-    if (lock_[a] || lock_[b]) return;
+  // The collapse of edge (a, b): which end stays, where it goes, at what cost. False when the
+  // edge may not collapse at all.
+  bool evaluate(Index a, Index b, Placement& out) const {
+    if (lock_[a] || lock_[b]) return false;
     if (a > b) std::swap(a, b);
     Quadric q = quadric_[a];
     q += quadric_[b];
-    Vec best;
     bool ba = boundary_[a], bb = boundary_[b];
-    std::vector<Vec> options;
-    Index keep = a, drop = b;
+    Vec options[4];
+    int n = 0;
+    out.keep = a, out.drop = b;
     if (ba != bb) {
       // An interior vertex goes to the boundary one: the boundary stays where it is.
-      options.push_back(ba ? pos_[a] : pos_[b]);
-      if (bb) keep = b, drop = a;
+      options[n++] = ba ? at(a) : at(b);
+      if (bb) out.keep = b, out.drop = a;
     } else if (ba && bb && !is_boundary_edge(a, b)) {
-      return;  // two boundary vertices joined through the interior: would pinch
+      return false;  // two boundary vertices joined through the interior: would pinch
     } else {
-      Vec opt;
-      if (q.optimum(opt)) options.push_back(opt);
-      options.push_back(pos_[a]);
-      options.push_back(pos_[b]);
-      options.push_back({(pos_[a][0] + pos_[b][0]) / 2, (pos_[a][1] + pos_[b][1]) / 2, (pos_[a][2] + pos_[b][2]) / 2});
+      if (q.optimum(options[n])) ++n;
+      options[n++] = at(a);
+      options[n++] = at(b);
+      {
+        Vec pa = at(a), pb = at(b);
+        options[n++] = {(pa[0] + pb[0]) / 2, (pa[1] + pb[1]) / 2, (pa[2] + pb[2]) / 2};
+      }
     }
-    double best_cost = INFINITY;
-    for (const Vec& x : options) {
-      double cost = q.eval(x);
-      if (cost < best_cost) best_cost = cost, best = x;
+    out.cost = INFINITY;
+    for (int i = 0; i < n; ++i) {
+      mesh::Point stored = to_float(options[i]);
+      options[i] = {stored[0], stored[1], stored[2]};
+      double cost = q.eval(options[i]);
+      if (cost < out.cost) out.cost = cost, out.position = options[i];
     }
     // The planes' own weight (without the boundary constraints' extra) normalises the error.
-    double rms = q.weight > 0 ? std::sqrt(best_cost / q.weight) : 0;
-    double rank = params_.max_error > 0 ? rms : best_cost;
-    heap_.push({rank, rms, keep, drop, stamp_[keep], stamp_[drop], best});
+    out.rms = q.weight > 0 ? std::sqrt(out.cost / q.weight) : 0;
+    return true;
   }
 
-  bool collapse(const Candidate& c) {
-    Index keep = c.keep, drop = c.drop;
+  void push_candidate(Index a, Index b, bool keep_heap_order) {
+    Placement p;
+    if (!evaluate(a, b, p)) return;
+    if (keep_heap_order) heap_.push({rank_of(p), p.keep, p.drop});
+    else heap_.append({rank_of(p), p.keep, p.drop});
+  }
+
+  bool collapse(Index keep, Index drop, const Vec& position) {
     // Triangles on the edge, and the link condition.
-    std::vector<Index> shared;
+    std::vector<Index>& shared = shared_;
+    shared.clear();
     for (Index t : vt_[keep]) {
       const auto& tri = tris_[t];
       if (tri[0] == drop || tri[1] == drop || tri[2] == drop) shared.push_back(t);
     }
     if (shared.empty() || shared.size() > 2) return false;
-    std::vector<Index> nk, nd, common;
+    std::vector<Index>&nk = nk_, &nd = nd_, &common = common_;
+    common.clear();
     neighbours(keep, nk);
     neighbours(drop, nd);
     std::set_intersection(nk.begin(), nk.end(), nd.begin(), nd.end(), std::back_inserter(common));
@@ -308,8 +405,8 @@ class Simplifier {
         const auto& tri = tris_[t];
         Vec p[3], q[3];
         for (int k = 0; k < 3; ++k) {
-          p[k] = pos_[tri[k]];
-          q[k] = (tri[k] == keep || tri[k] == drop) ? c.position : pos_[tri[k]];
+          p[k] = at(tri[k]);
+          q[k] = (tri[k] == keep || tri[k] == drop) ? position : at(tri[k]);
         }
         Vec before = cross(sub(p[1], p[0]), sub(p[2], p[0]));
         Vec after = cross(sub(q[1], q[0]), sub(q[2], q[0]));
@@ -333,12 +430,10 @@ class Simplifier {
     vt_[drop].clear();
     alive_[drop] = false;
     live_vertices_--;
-    pos_[keep] = c.position;
+    pos_[keep] = to_float(position);
     quadric_[keep] += quadric_[drop];
     boundary_[keep] = boundary_[keep] || boundary_[drop];
-    // Only the edges at `keep` changed cost; others are re-checked when they surface.
-    stamp_[keep]++;
-    stamp_[drop]++;
+    // Only the edges at `keep` changed cost; the old entries are dropped when they surface.
     push_edges_of(keep);
     return true;
   }
@@ -355,23 +450,29 @@ class Simplifier {
       renumber[v] = static_cast<Index>(out.positions.size());
       result.source_ids.push_back(static_cast<Index>(v));
       if (params_.export_quadrics) result.quadrics.push_back(to_array(quadric_[v]));
-      out.positions.push_back({static_cast<float>(pos_[v][0]), static_cast<float>(pos_[v][1]), static_cast<float>(pos_[v][2])});
+      out.positions.push_back(pos_[v]);
     }
     for (std::size_t t = 0; t < tris_.size(); ++t)
       if (tri_alive_[t]) out.triangles.push_back({renumber[tris_[t][0]], renumber[tris_[t][1]], renumber[tris_[t][2]]});
     return out;
   }
 
+  Vec at(Index v) const { return {pos_[v][0], pos_[v][1], pos_[v][2]}; }
+  static mesh::Point to_float(const Vec& v) {
+    return {static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2])};
+  }
+
   const SimplifyParams& params_;
-  std::vector<Vec> pos_;
+  std::vector<mesh::Point> pos_;  // float32 like the output: a placement is rounded before it is costed
   std::vector<mesh::Triangle> tris_;
   std::vector<bool> tri_alive_, alive_, boundary_, lock_;
   std::vector<Index> locked_;
   std::vector<std::vector<Index>> vt_;
   std::vector<Quadric> quadric_;
-  std::vector<std::uint32_t> stamp_;
-  std::priority_queue<Candidate> heap_;
-  std::vector<Index> scratch_;
+  QuaternaryHeap<Candidate, Cheaper> heap_;
+  std::size_t compact_at_ = 0;
+  std::vector<Index> around_, shared_, nk_, nd_, common_;
+  std::vector<std::pair<Index, int>> edge_count_;  // scratch, kept to avoid allocations
   std::size_t live_vertices_ = 0;
 };
 
