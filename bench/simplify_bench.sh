@@ -6,7 +6,8 @@
 # (bench/cgal_simplify, bench/meshopt_simplify). Inputs: the shared scans at 5k/10k/20k vertices,
 # a generated 2M-triangle terrain and 5M-triangle sphere at 1% of their vertices.
 # Figures: wall time and peak RSS of each whole process; mean error = the mean of meshflow
-# compare's mean_ab and mean_ba (% of the input's diagonal). SMALL=1 runs the scans only.
+# compare's mean_ab and mean_ba (% of the input's diagonal). SMALL=1 runs the scans only, BIG=1
+# the generated meshes only.
 set -uo pipefail
 MF=$(realpath "${MESHFLOW:-build/meshflow}"); OUT=${BENCH_OUT:-bench/out}/simplify; BIN=$(dirname "$MF")/bench
 SHARED=$(cd "$(dirname "$0")/../../shared/data/meshes" && pwd)
@@ -14,7 +15,9 @@ mkdir -p "$OUT"
 TIMEOUT=${TIMEOUT:-900}
 
 inputs=()
-for scan in real/stanford-bunny.obj real/dragon_100k.ply real/igea_tristrips.ply; do
+scans=(real/stanford-bunny.obj real/dragon_100k.ply real/igea_tristrips.ply)
+[ -n "${BIG:-}" ] && scans=()
+for scan in "${scans[@]}"; do
   name=$(basename "${scan%.*}")
   [ -f "$OUT/$name.ply" ] || "$MF" convert "$SHARED/$scan" "$OUT/$name.ply"
   for v in 5000 10000 20000; do inputs+=("$name:$v"); done
@@ -68,6 +71,7 @@ echo "| input | target v | program | wall s | peak MB | vertices | mean error % 
 echo "|---|---:|---|---:|---:|---:|---:|"
 for item in "${inputs[@]}"; do
   name=${item%%:*}; v=${item##*:}; IN=$OUT/$name.ply
+  tris=$("$MF" op NumberOfTriangles "$IN")
   declare -A res=()
   res[meshflow]=$(run "$OUT/mf.ply" "$MF" op Simplify "$IN" -o "$OUT/mf.ply" --param targetVertices=$v)
   res[meshlab]=$(run "$OUT/ml.ply" xvfb-run -a meshlabserver -i "$IN" -o "$OUT/ml.ply" -s "$(mlx $((2 * v)))")
@@ -78,17 +82,20 @@ for item in "${inputs[@]}"; do
     read s mb nv err <<<"${res[$p]}"
     echo "| $name | $v | $p | $s | $mb | $nv | $err |"
   done
-  python3 - "${res[meshflow]}" "${res[meshlab]}" "${res[openmesh]}" "${res[cgal]}" "${res[meshoptimizer]}" <<'PY'
+  python3 - "$tris" "${res[meshflow]}" "${res[meshlab]}" "${res[openmesh]}" "${res[cgal]}" "${res[meshoptimizer]}" <<'PY'
 import sys
 def parse(s):
     f = s.split()
     try: return float(f[0]), float(f[3])
     except Exception: return None
-mf, ml, om, cg, mo = map(parse, sys.argv[1:])
+tris = int(sys.argv[1])
+mf, ml, om, cg, mo = map(parse, sys.argv[2:])
+mf_mb = float(sys.argv[2].split()[1]) if mf else None
 best = [r[1] for r in (ml, om, cg) if r]
 parts = []
 if mf and best: parts.append(f"error vs best of MeshLab/OpenMesh/CGAL: {mf[1] / min(best):.3f}x (goal <= 1.05)")
 if mf and mo: parts.append(f"time vs meshoptimizer: {mf[0] / max(mo[0], 0.01):.2f}x (goal <= 3)")
+if mf_mb is not None: parts.append(f"meshflow peak: {mf_mb * 1048576 / tris:.0f} B per input triangle (goal < 150)")
 print("|  |  | **ratios** | " + "; ".join(parts) + " | | | |")
 PY
 done

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "mesh/errors.h"
 
@@ -50,6 +51,75 @@ struct Quadric {
 };
 
 constexpr double kBoundaryWeight = 100.0;
+constexpr Index kNoCorner = std::numeric_limits<Index>::max();
+
+// The triangles around each vertex as linked lists through the triangles' corners (corner
+// 3t+k is vertex k of triangle t): 4 bytes per corner and per vertex, no allocation per vertex,
+// and a collapse hands the dropped vertex's triangles to the kept one by splicing.
+class VertexFans {
+ public:
+  VertexFans(const std::vector<mesh::Triangle>& triangles, std::size_t vertices, const std::vector<bool>& skip)
+      : head_(vertices, kNoCorner), next_(3 * triangles.size(), kNoCorner) {
+    for (std::size_t t = triangles.size(); t-- > 0;) {
+      if (skip[t]) continue;
+      for (Index k = 0; k < 3; ++k) {
+        Index c = static_cast<Index>(3 * t + k), v = triangles[t][k];
+        next_[c] = head_[v];
+        head_[v] = c;
+      }
+    }
+  }
+  class Iterator {
+   public:
+    Iterator(const VertexFans* fans, Index corner) : fans_(fans), corner_(corner) {}
+    Index operator*() const { return corner_ / 3; }
+    Iterator& operator++() {
+      corner_ = fans_->next_[corner_];
+      return *this;
+    }
+    bool operator!=(const Iterator& o) const { return corner_ != o.corner_; }
+
+   private:
+    const VertexFans* fans_;
+    Index corner_;
+  };
+  struct Range {
+    const VertexFans* fans;
+    Index first;
+    Iterator begin() const { return {fans, first}; }
+    Iterator end() const { return {fans, kNoCorner}; }
+  };
+  Range operator[](Index v) const { return {this, head_[v]}; }
+  bool empty(Index v) const { return head_[v] == kNoCorner; }
+  std::size_t count(Index v) const {
+    std::size_t n = 0;
+    for (Index c = head_[v]; c != kNoCorner; c = next_[c]) ++n;
+    return n;
+  }
+  // Unlinks triangle t from v's fan (t must be in it).
+  void remove(Index v, Index t) {
+    for (Index* link = &head_[v]; *link != kNoCorner; link = &next_[*link])
+      if (*link / 3 == t) {
+        *link = next_[*link];
+        return;
+      }
+  }
+  // Moves every triangle of `from` to `to`, renaming the corner in `triangles`.
+  void move_all(Index from, Index to, std::vector<mesh::Triangle>& triangles) {
+    Index last = kNoCorner;
+    for (Index c = head_[from]; c != kNoCorner; c = next_[c]) {
+      triangles[c / 3][c % 3] = to;
+      last = c;
+    }
+    if (last == kNoCorner) return;
+    next_[last] = head_[to];
+    head_[to] = head_[from];
+    head_[from] = kNoCorner;
+  }
+
+ private:
+  std::vector<Index> head_, next_;
+};
 
 // A 4-ary min-heap: half the levels of a binary one, and a node's children share cache lines,
 // which matters because the heap's cache misses are most of a simplification's time.
@@ -114,22 +184,16 @@ class Simplifier {
     pos_ = input.positions;
     tris_ = input.triangles;
     tri_alive_.assign(tris_.size(), true);
-    vt_.resize(V);
-    {  // exact capacities: no growth, no freed fragments left behind
-      std::vector<std::uint32_t> degree(V, 0);
-      for (const auto& tri : tris_)
-        for (Index v : tri) degree[v]++;
-      for (std::size_t v = 0; v < V; ++v) vt_[v].reserve(degree[v]);
-    }
+    std::vector<bool> degenerate(tris_.size(), false);
     for (std::size_t t = 0; t < tris_.size(); ++t) {
       const auto& tri = tris_[t];
       if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) {
         // Degenerate by index: kept as is, its vertices locked.
         for (Index v : tri) locked_.push_back(v);
-        continue;
+        degenerate[t] = true;
       }
-      for (Index v : tri) vt_[v].push_back(static_cast<Index>(t));
     }
+    vt_ = VertexFans(tris_, V, degenerate);
     quadric_.resize(V);
     boundary_.assign(V, false);
     std::vector<bool> lock(V, false);
@@ -139,7 +203,7 @@ class Simplifier {
       for (std::size_t v = 0; v < V && v < params_.locked->size(); ++v)
         if ((*params_.locked)[v]) lock_[v] = true;
     alive_.assign(V, false);
-    for (std::size_t v = 0; v < V; ++v) alive_[v] = !vt_[v].empty();
+    for (std::size_t v = 0; v < V; ++v) alive_[v] = !vt_.empty(static_cast<Index>(v));
     if (params_.quadrics) {
       for (std::size_t v = 0; v < V && v < params_.quadrics->size(); ++v) quadric_[v] = from_array((*params_.quadrics)[v]);
     } else for (std::size_t t = 0; t < tris_.size(); ++t) {
@@ -294,15 +358,15 @@ class Simplifier {
   // #triangles (closed) or #triangles+1 (open), every edge used once or twice, and exactly two
   // used once when open. `count` is count_edges(v).
   bool is_disk(Index v, const std::vector<std::pair<Index, int>>& count) const {
-    const auto& ts = vt_[v];
-    if (ts.empty()) return true;
+    if (vt_.empty(v)) return true;
+    const std::size_t triangles = vt_.count(v);
     int ones = 0;
     for (auto& [w, c] : count) {
       if (c > 2) return false;
       ones += c == 1;
     }
-    if (ones == 0) return count.size() == ts.size();
-    return ones == 2 && count.size() == ts.size() + 1;
+    if (ones == 0) return count.size() == triangles;
+    return ones == 2 && count.size() == triangles + 1;
   }
 
   void neighbours(Index v, std::vector<Index>& out) const {
@@ -417,17 +481,9 @@ class Simplifier {
     // Apply.
     for (Index t : shared) {
       tri_alive_[t] = false;
-      for (Index v : tris_[t]) {
-        auto& list = vt_[v];
-        list.erase(std::remove(list.begin(), list.end(), t), list.end());
-      }
+      for (Index v : tris_[t]) vt_.remove(v, t);
     }
-    for (Index t : vt_[drop]) {
-      for (Index& v : tris_[t])
-        if (v == drop) v = keep;
-      vt_[keep].push_back(t);
-    }
-    vt_[drop].clear();
+    vt_.move_all(drop, keep, tris_);
     alive_[drop] = false;
     live_vertices_--;
     pos_[keep] = to_float(position);
@@ -467,7 +523,7 @@ class Simplifier {
   std::vector<mesh::Triangle> tris_;
   std::vector<bool> tri_alive_, alive_, boundary_, lock_;
   std::vector<Index> locked_;
-  std::vector<std::vector<Index>> vt_;
+  VertexFans vt_{{}, 0, {}};
   std::vector<Quadric> quadric_;
   QuaternaryHeap<Candidate, Cheaper> heap_;
   std::size_t compact_at_ = 0;
