@@ -273,38 +273,18 @@ PartitionInfo partition_file(const std::string& input, std::size_t vertices_per_
 
 void write_partition_info(const std::string& dir, const PartitionInfo& info) {
   std::ofstream out(dir + "/partition.txt");
-  out.precision(17);  // the diagonal round-trips exactly, whatever the mesh's scale
-  out << "parts " << info.parts << "\ndiagonal " << info.diagonal << "\n";
-  for (std::size_t p = 0; p < info.adjacency.size(); ++p) {
-    out << "neighbours " << p;
-    for (auto q : info.adjacency[p]) out << ' ' << q;
-    out << '\n';
-  }
+  out << mesh::encode_parts_index({info.parts, info.diagonal, info.adjacency});
   if (!out) throw IoError(dir + "/partition.txt: cannot write");
 }
 
 PartitionInfo read_partition_info(const std::string& dir) {
   const std::string path = dir + "/partition.txt";
-  std::ifstream in(path);
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InvalidInput(path + ": cannot open (written by meshflow partition)");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  mesh::PartsIndex index = mesh::decode_parts_index(text, path);
   PartitionInfo info;
-  std::string k1, k2;
-  if (!(in >> k1 >> info.parts >> k2 >> info.diagonal) || k1 != "parts" || k2 != "diagonal" || info.parts > (1u << 24) ||
-      !(info.diagonal >= 0))
-    throw InvalidInput(path + ": expected \"parts N\" and \"diagonal X\" (written by meshflow partition)");
-  info.adjacency.assign(info.parts, {});
-  std::string line;
-  std::getline(in, line);
-  for (std::size_t n = 3; std::getline(in, line); ++n) {
-    std::istringstream words(line);
-    std::string key;
-    std::size_t p, q;
-    if (!(words >> key >> p) || key != "neighbours" || p >= info.parts)
-      throw InvalidInput(path + ":" + std::to_string(n) + ": expected \"neighbours P Q...\" with P < " + std::to_string(info.parts));
-    while (words >> q) {
-      if (q >= info.parts) throw InvalidInput(path + ":" + std::to_string(n) + ": neighbour " + std::to_string(q) + " >= parts");
-      info.adjacency[p].push_back(static_cast<std::uint32_t>(q));
-    }
-  }
+  info.parts = index.parts, info.diagonal = index.diagonal, info.adjacency = std::move(index.adjacency);
   return info;
 }
 

@@ -258,5 +258,22 @@ TEST(PartFiles, RoundTripAndRefuseDamage) {
   EXPECT_THROW(mesh::decode_part(empty_with_flag, "p.mfp"), ParseError);
 }
 
+TEST(PartsIndex, RoundTripAndRefuseDamageWithLine) {
+  mesh::PartsIndex index{3, 1.0 / 3.0, {{1, 2}, {0}, {0}}};
+  mesh::PartsIndex back = mesh::decode_parts_index(mesh::encode_parts_index(index), "partition.txt");
+  EXPECT_EQ(back.parts, 3u);
+  EXPECT_EQ(back.diagonal, index.diagonal);
+  EXPECT_EQ(back.adjacency, index.adjacency);
+  for (const char* bad : {"parts 2\ndiagonal 1\nneighbours 0 1\n", "parts 1\ndiagonal -1\nneighbours 0\n",
+                          "parts 2\ndiagonal 1\nneighbours 0 1\nneighbours 1 1\n", "parts 99999999\ndiagonal 1\n"}) {
+    try {
+      mesh::decode_parts_index(bad, "partition.txt");
+      FAIL() << "accepted: " << bad;
+    } catch (const ParseError& e) {
+      EXPECT_NE(std::string(e.what()).find("partition.txt:"), std::string::npos) << e.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace meshflow::parallel
