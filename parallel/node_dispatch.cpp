@@ -3,6 +3,7 @@
 #include <httplib.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <condition_variable>
 #include <filesystem>
 #include <mutex>
@@ -30,7 +31,9 @@ bool is_loopback(const std::string& url) {
 
 struct NodeDispatch::Impl {
   std::vector<std::string> nodes;
-  std::vector<bool> busy;
+  enum State { kFree, kBusy, kDown };
+  std::vector<State> state;
+  std::string last_failure;
   std::mutex mutex;
   std::condition_variable freed;
   std::string dir, base_url;
@@ -54,7 +57,7 @@ NodeDispatch::NodeDispatch(std::vector<std::string> node_urls, std::string parts
     loopback = loopback && is_loopback(url);
   }
   d.nodes = std::move(node_urls);
-  d.busy.assign(d.nodes.size(), false);
+  d.state.assign(d.nodes.size(), Impl::kFree);
   d.dir = std::move(parts_dir);
   d.server.Get(R"(/parts/(part-\d+\.mfp))", [&d](const httplib::Request& req, httplib::Response& res) {
     protocol::serve_file(req, res, d.dir + "/" + std::string(req.matches[1]), "application/octet-stream");
@@ -75,34 +78,26 @@ NodeDispatch::~NodeDispatch() {
 
 std::size_t NodeDispatch::nodes() const { return impl_->nodes.size(); }
 
-services::PartStats NodeDispatch::run(std::size_t p, double max_error_abs) {
-  Impl& d = *impl_;
-  std::size_t n;
-  {
-    std::unique_lock lock(d.mutex);
-    d.freed.wait(lock, [&] { return std::find(d.busy.begin(), d.busy.end(), false) != d.busy.end(); });
-    n = std::find(d.busy.begin(), d.busy.end(), false) - d.busy.begin();
-    d.busy[n] = true;
-  }
-  struct Release {
-    Impl& d;
-    std::size_t n;
-    ~Release() {
-      std::lock_guard lock(d.mutex);
-      d.busy[n] = false;
-      d.freed.notify_one();
-    }
-  } release{d, n};
-  const std::string node = d.nodes[n];
-  const std::string part_url = d.base_url + "/parts/part-" + std::to_string(p) + ".mfp";
+namespace {
+
+// One attempt on a node. \throws NodeDown when no answer came (the part may go to another node).
+struct NodeDown : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+services::PartStats run_on(const std::string& node, const std::string& base_url, const std::string& dir, std::size_t p,
+                           double max_error_abs) {
+  const std::string part_url = base_url + "/parts/part-" + std::to_string(p) + ".mfp";
   json request{{"vertices", part_url}, {"triangles", part_url}, {"removed", json::array()}, {"max_error_abs", max_error_abs}};
   protocol::HttpOptions http;
   http.timeout = std::chrono::minutes(60);
   protocol::HttpResult r = protocol::http_request("POST", node + "/parts/simplify", request.dump(), http);
+  if (r.status == 0) throw NodeDown(node + ": " + r.describe());
   json answer = json::parse(r.body, nullptr, false);
-  while (r.status == 202 && answer.is_object() && answer.contains("task")) {  // a long run: poll its task
+  while (r.status == 202 && answer.is_object() && answer.contains("task") && answer["task"].is_string()) {  // poll the task
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
     protocol::HttpResult t = protocol::http_request("GET", answer["task"].get<std::string>(), {}, http);
+    if (t.status == 0) throw NodeDown(node + ": " + t.describe());
     json state = json::parse(t.body, nullptr, false);
     if (!t.ok() || !state.is_object()) throw IoError(node + ": lost the task of part " + std::to_string(p) + ": " + t.describe());
     if (state.value("state", "") == "running") continue;
@@ -112,12 +107,48 @@ services::PartStats NodeDispatch::run(std::size_t p, double max_error_abs) {
   }
   if (!r.ok() || !answer.is_object() || !answer.contains("part") || !answer["part"].is_string())
     throw IoError(node + ": part " + std::to_string(p) + ": " + r.describe());
-  protocol::DownloadResult got =
-      protocol::http_download(answer["part"].get<std::string>(), part_path(d.dir, p, true), answer.value("sha256", std::string()).empty()
-                                                                                                 ? std::nullopt
-                                                                                                 : std::optional<std::string>(answer["sha256"]));
+  std::optional<std::string> sha;
+  if (answer.contains("sha256") && answer["sha256"].is_string()) sha = answer["sha256"].get<std::string>();
+  protocol::DownloadResult got = protocol::http_download(answer["part"].get<std::string>(), part_path(dir, p, true), sha);
+  if (got.status == 0 && got.error.find("SHA") == std::string::npos) throw NodeDown(node + ": " + got.describe());
   if (!got.ok()) throw IoError(node + ": cannot fetch the simplified part " + std::to_string(p) + ": " + got.describe());
   return stats_from_json(answer.value("stats", json::object()));
+}
+
+}  // namespace
+
+// A node that does not answer is dropped and the part goes to another (DESIGN §10).
+services::PartStats NodeDispatch::run(std::size_t p, double max_error_abs) {
+  Impl& d = *impl_;
+  for (;;) {
+    std::size_t n;
+    {
+      std::unique_lock lock(d.mutex);
+      auto usable = [&] { return std::find(d.state.begin(), d.state.end(), Impl::kFree) != d.state.end(); };
+      auto alive = [&] { return std::count(d.state.begin(), d.state.end(), Impl::kDown) < static_cast<long>(d.state.size()); };
+      d.freed.wait(lock, [&] { return usable() || !alive(); });
+      if (!alive()) throw IoError("every node stopped answering: " + d.last_failure);
+      n = std::find(d.state.begin(), d.state.end(), Impl::kFree) - d.state.begin();
+      d.state[n] = Impl::kBusy;
+    }
+    try {
+      services::PartStats stats = run_on(d.nodes[n], d.base_url, d.dir, p, max_error_abs);
+      std::lock_guard lock(d.mutex);
+      d.state[n] = Impl::kFree;
+      d.freed.notify_one();
+      return stats;
+    } catch (const NodeDown& e) {
+      std::lock_guard lock(d.mutex);
+      d.state[n] = Impl::kDown;
+      d.last_failure = e.what();
+      d.freed.notify_all();
+    } catch (...) {
+      std::lock_guard lock(d.mutex);
+      d.state[n] = Impl::kFree;
+      d.freed.notify_one();
+      throw;
+    }
+  }
 }
 
 }  // namespace meshflow::parallel

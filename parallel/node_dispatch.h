@@ -3,7 +3,8 @@
 // parts directory's part files over HTTP itself (GET /parts/part-<p>.mfp, nothing else), each
 // node fetches its part, simplifies it and answers the URL of the simplified part on its
 // /files, which the coordinator downloads into the parts directory. One part per node at a
-// time; a long run answers 202 and is polled at its task URL.
+// time; a long run answers 202 and is polled at its task URL. A node that stops answering is
+// dropped and its part goes to another node.
 // Nodes started with --hub fetch only from the hub and registered nodes, so they refuse the
 // coordinator's URL: use standalone nodes (`meshflow node` without --hub) for now.
 

@@ -285,9 +285,7 @@ struct NodeServer::Impl {
       throw InvalidInput("'max_error_abs' must be a number > 0");
     check_fetch_origin(part_url);
     const auto incoming = cache->files_dir() / ("incoming-" + std::to_string(next_incoming++) + ".mfp");
-    protocol::HttpOptions http;
-    http.bearer_token = options.token;
-    protocol::DownloadResult got = protocol::http_download(part_url, incoming.string(), std::nullopt, false, http);
+    protocol::DownloadResult got = protocol::http_download(part_url, incoming.string());
     if (!got.ok()) throw IoError("cannot fetch the part " + part_url + ": " + got.describe());
     std::vector<std::uint8_t> bytes;
     {

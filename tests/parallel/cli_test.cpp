@@ -116,5 +116,40 @@ TEST(SimplifyCommand, NodesGiveTheSameResultAsLocalWorkers) {
   EXPECT_EQ(status, "400");
 }
 
+// A node that answers /service.json but drops every /parts/simplify connection: its parts go
+// to the other node; with no other node the run fails naming it.
+TEST(SimplifyCommand, PartsOfANodeThatStopsAnsweringGoElsewhere) {
+  meshflow::testing::TempDir dir;
+  mesh::GenerateParams g;
+  g.shape = mesh::Shape::Sphere;
+  g.triangles = 20000;
+  mesh::generate_mesh(g, dir.file("in.ply"));
+  std::ofstream(dir.file("stub.py")) << R"(import http.server, socketserver, sys
+class H(http.server.BaseHTTPRequestHandler):
+    def do_GET(self):
+        self.send_response(200); self.send_header('Content-Type', 'application/json'); self.end_headers(); self.wfile.write(b'{}')
+    def do_POST(self):
+        self.close_connection = True; self.connection.close()
+    def log_message(self, *a): pass
+s = socketserver.TCPServer(('127.0.0.1', 0), H)
+print('stub ready at http://127.0.0.1:%d' % s.server_address[1], flush=True)
+s.serve_forever()
+)";
+  meshflow::testing::ChildProcess stub({"/usr/bin/python3", dir.file("stub.py")});
+  meshflow::testing::ChildProcess node({MESHFLOW_BINARY, "node", "--listen", "127.0.0.1:0", "--data", dir.file("n")});
+  std::string stub_url = stub.ready_url(), node_url = node.ready_url();
+  ASSERT_FALSE(stub_url.empty());
+  ASSERT_FALSE(node_url.empty());
+  const std::string common = dir.file("in.ply") + " --max-error 0.1 --vertices-per-part 2000";
+  Outcome r = run(dir, "simplify " + common + " -o " + dir.file("local.ply") + " --workers 1");
+  ASSERT_EQ(r.status, 0) << r.err;
+  r = run(dir, "simplify " + common + " -o " + dir.file("nodes.ply") + " --nodes " + stub_url + "," + node_url);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(mesh::read_mesh(dir.file("nodes.ply")) == mesh::read_mesh(dir.file("local.ply")));
+  r = run(dir, "simplify " + common + " -o " + dir.file("none.ply") + " --nodes " + stub_url);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("every node stopped answering: " + stub_url), std::string::npos) << r.err;
+}
+
 }  // namespace
 }  // namespace meshflow::parallel
