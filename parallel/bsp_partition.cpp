@@ -34,22 +34,36 @@ Bsp::Bsp(std::vector<mesh::Point> samples, std::size_t stride, std::array<float,
       done.push_back(std::move(cell));
       continue;
     }
-    int axis = 0;
-    for (int k = 1; k < 3; ++k)
-      if (cell.hi[k] - cell.lo[k] > cell.hi[axis] - cell.lo[axis]) axis = k;
-    auto mid = cell.samples.begin() + cell.samples.size() / 2;
-    std::nth_element(cell.samples.begin(), mid, cell.samples.end(),
-                     [axis](const mesh::Point& a, const mesh::Point& b) { return a[axis] < b[axis]; });
-    float split = (*mid)[axis];
+    // The longest side first; a median equal to the side's largest sample (many samples on one
+    // plane, e.g. a regular grid) splits just below it instead; a side where every sample
+    // has the same coordinate gives way to the next longest.
+    std::array<int, 3> axes{0, 1, 2};
+    std::stable_sort(axes.begin(), axes.end(), [&](int a, int b) { return cell.hi[a] - cell.lo[a] > cell.hi[b] - cell.lo[b]; });
+    int axis = -1;
+    float split = 0;
+    for (int k : axes) {
+      auto mid = cell.samples.begin() + cell.samples.size() / 2;
+      std::nth_element(cell.samples.begin(), mid, cell.samples.end(),
+                       [k](const mesh::Point& a, const mesh::Point& b) { return a[k] < b[k]; });
+      float median = (*mid)[k];
+      float below = -INFINITY, above = -INFINITY;  // the largest sample under the median; the largest overall
+      for (const auto& p : cell.samples) {
+        if (p[k] < median) below = std::max(below, p[k]);
+        above = std::max(above, p[k]);
+      }
+      if (above > median) axis = k, split = median;
+      else if (below > -INFINITY) axis = k, split = below;
+      if (axis >= 0) break;
+    }
+    if (axis < 0) {  // every sample at one point
+      done.push_back(std::move(cell));
+      continue;
+    }
     Open lower{static_cast<std::uint32_t>(nodes_.size()), {}, cell.lo, cell.hi};
     Open upper{static_cast<std::uint32_t>(nodes_.size() + 1), {}, cell.lo, cell.hi};
     lower.hi[axis] = split;
     upper.lo[axis] = split;
     for (const auto& p : cell.samples) (p[axis] <= split ? lower : upper).samples.push_back(p);
-    if (lower.samples.empty() || upper.samples.empty()) {  // all samples on the plane
-      done.push_back(std::move(cell));
-      continue;
-    }
     nodes_[cell.node].axis = axis;
     nodes_[cell.node].split = split;
     nodes_[cell.node].lower = lower.node;

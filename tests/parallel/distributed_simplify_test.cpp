@@ -90,6 +90,19 @@ TEST(Partition, EveryTriangleOnceSharedFlagsAndAdjacencyConsistent) {
   EXPECT_EQ(back.adjacency, info.adjacency);
 }
 
+// A regular grid, where the sample sees a few columns only (the median is the largest sample on
+// one side): found on terrain_fuji_512, which used to come out as one part.
+TEST(Partition, SplitsARegularGridIntoPartsNearTheLimit) {
+  meshflow::testing::TempDir dir;
+  const std::string in = meshflow::testing::shared_meshes() + "/large/terrain_fuji_512.ply";
+  PartitionInfo info = partition_file(in, 5000, dir.file("parts"));
+  EXPECT_GE(info.parts, info.input_vertices / 5000);
+  for (std::size_t p = 0; p < info.parts; ++p) {
+    mesh::PartFile part = mesh::read_part(part_path(dir.file("parts"), p, false));
+    EXPECT_LE(part.positions.size(), 5000u * 2) << "part " << p;
+  }
+}
+
 // The same mesh as binary PLY, ASCII OFF and OBJ gives the same parts.
 TEST(Partition, SamePartsFromEveryFormat) {
   meshflow::testing::TempDir dir;
