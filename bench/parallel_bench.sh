@@ -39,6 +39,7 @@ for run in "${runs[@]}"; do
   in_bytes=$(stat -c %s "$in")
   for k in $NODES; do
     rm -rf "$OUT/out.ply" "$OUT/report.json" "$OUT/parts" "$OUT"/node*
+    echo 0 >"$OUT/disk"
     urls=()
     for i in $(seq 1 "$k"); do
       "$MF" node --listen 127.0.0.1:0 --data "$OUT/node$i" --capacity 100000000 >"$OUT/node$i.out" 2>&1 & PIDS+=("$!")
@@ -47,9 +48,8 @@ for run in "${runs[@]}"; do
       for t in $(seq 1 100); do u=$(grep -oE 'http://[0-9.:]+' "$OUT/node$i.out" | head -n1); [ -n "$u" ] && break; sleep 0.1; done
       urls+=("$u")
     done
-    ( peak=0; while true; do d=$(du -sb "$OUT/parts" "$OUT"/node? 2>/dev/null | awk '{s+=$1} END {print s+0}');
+    ( peak=0; while true; do d=$(du -sb "$OUT/parts" "$OUT"/node? 2>/dev/null | awk '{s+=$1} END {printf "%.0f", s}');
         [ "$d" -gt "$peak" ] && peak=$d && echo "$peak" >"$OUT/disk"; sleep 1; done ) & sampler=$!
-    echo 0 >"$OUT/disk"
     ok=1
     /usr/bin/time -f "%e %M" -o "$OUT/time" timeout "$TIMEOUT" "$MF" simplify "$in" -o "$OUT/out.ply" --max-error 0.1 \
         --nodes "$(IFS=,; echo "${urls[*]}")" --parts-dir "$OUT/parts" --report "$OUT/report.json" >/dev/null 2>"$OUT/err" || ok=0
