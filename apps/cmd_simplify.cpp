@@ -1,17 +1,21 @@
-// meshflow simplify IN -o OUT --max-error E [--workers N] [--vertices-per-part N] [--report R.json]
-//   [--parts-dir D]; meshflow partition IN --vertices-per-part N --parts-dir D;
-// meshflow merge D -o OUT --max-error E (after `simplify --parts-dir D`).
+// meshflow simplify IN -o OUT --max-error E [--workers N | --nodes URL,...] [--vertices-per-part N]
+//   [--report R.json] [--parts-dir D] [--progress]; meshflow partition IN --vertices-per-part N
+//   --parts-dir D; meshflow merge D -o OUT.ply --max-error E (after `simplify --parts-dir D`).
 #include <unistd.h>
 
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <memory>
+#include <mutex>
+#include <sstream>
 #include <thread>
 
 #include "apps/command.h"
 #include "mesh/errors.h"
 #include "mesh/mesh_io.h"
 #include "parallel/distributed_simplify.h"
+#include "parallel/node_dispatch.h"
 
 namespace meshflow::apps {
 namespace {
@@ -21,56 +25,41 @@ struct SimplifyArgs {
   double max_error = 0;
   std::size_t vertices_per_part = 1000000;
   unsigned workers = 0;
-  std::string node_urls;
+  std::string nodes;
   std::string parts_dir;
+  bool progress = false;
 };
 
-// D/partition.txt: what the merge needs from the partition.
-void write_partition_info(const std::string& dir, std::size_t parts, double diagonal) {
-  std::ofstream out(dir + "/partition.txt");
-  out.precision(17);  // the diagonal round-trips exactly, whatever the mesh's scale
-  out << "parts " << parts << "\ndiagonal " << diagonal << "\n";
-  if (!out) throw IoError(dir + "/partition.txt: cannot write");
-}
-
-void read_partition_info(const std::string& dir, std::size_t& parts, double& diagonal) {
-  std::ifstream in(dir + "/partition.txt");
-  std::string k1, k2;
-  if (!(in >> k1 >> parts >> k2 >> diagonal) || k1 != "parts" || k2 != "diagonal")
-    throw InvalidInput(dir + "/partition.txt: expected \"parts N\" and \"diagonal X\" (written by meshflow partition)");
-}
-
-std::function<void(const std::string&, double)> terminal_progress() {
-  if (!isatty(STDERR_FILENO)) return {};
-  return [](const std::string& step, double f) {
-    int filled = static_cast<int>(30 * f);
-    std::fprintf(stderr, "\r%-6s [%-30.*s] %5.1f%%", step.c_str(), filled, "##############################", 100 * f);
+// A bar on stderr when it is a terminal (or with --progress).
+std::function<void(const std::string&, double)> terminal_progress(bool forced) {
+  if (!forced && !isatty(STDERR_FILENO)) return {};
+  auto mutex = std::make_shared<std::mutex>();
+  return [mutex](const std::string& step, double f) {
+    std::lock_guard lock(*mutex);
+    int filled = static_cast<int>(30 * std::clamp(f, 0.0, 1.0));
+    std::fprintf(stderr, "\r%-9s [%-30.*s] %5.1f%%", step.c_str(), filled, "##############################", 100 * f);
   };
 }
 
 void add_simplify_command(CLI::App& app, int& exit_status) {
   auto args = std::make_shared<SimplifyArgs>();
-  CLI::App* cmd = app.add_subcommand("simplify", "Simplify a large mesh in BSP parts (DESIGN §9)");
+  CLI::App* cmd = app.add_subcommand("simplify", "Simplify a large mesh in BSP parts, out of core (DESIGN §9)");
   cmd->add_option("IN", args->in, "Input mesh")->required();
   cmd->add_option("-o,--output", args->out, "Output mesh")->required();
   cmd->add_option("--max-error", args->max_error, "Maximum RMS error, % of the input's diagonal")->required();
   cmd->add_option("--vertices-per-part", args->vertices_per_part, "Largest part, in vertices");
-  cmd->add_option("--workers", args->workers, "Parts simplified at once (default: the cores)");
-  cmd->add_option("--node-urls,--nodes", args->node_urls, "Mesh nodes (not implemented yet)");
-  cmd->add_option("--report", args->report, "Write parts and per-step timings here (JSON)");
+  cmd->add_option("--workers", args->workers, "Local worker processes at once (default: the cores)");
+  cmd->add_option("--nodes", args->nodes, "Mesh nodes (base URLs, comma-separated) that simplify the parts");
+  cmd->add_option("--report", args->report, "Write parts, independent sets and per-step timings here (JSON)");
   cmd->add_option("--parts-dir", args->parts_dir, "Keep the part files here (default: a temporary folder beside OUT)");
+  cmd->add_flag("--progress", args->progress, "Progress bar on stderr even when it is not a terminal");
   cmd->callback([args, &exit_status] {
-    if (!args->node_urls.empty())
-      throw InvalidInput("--node-urls: dispatch to mesh nodes is not implemented yet; use --workers");
-    if (args->max_error <= 0) throw InvalidInput("--max-error must be > 0 (% of the diagonal)");
-    mesh::Mesh input = mesh::read_mesh(args->in);
-    const double diagonal = mesh::bounding_box(input).diagonal();
+    if (!(args->max_error > 0)) throw InvalidInput("--max-error must be > 0 (% of the diagonal)");
     parallel::DistributedParams params;
-    params.max_error = args->max_error / 100.0 * diagonal;
+    params.max_error_percent = args->max_error;
     params.vertices_per_part = args->vertices_per_part;
     params.workers = args->workers ? args->workers : std::max(1u, std::thread::hardware_concurrency());
-    params.progress = terminal_progress();
-    params.worker_executable = std::filesystem::read_symlink("/proc/self/exe").string();
+    params.progress = terminal_progress(args->progress);
     bool temporary = args->parts_dir.empty();
     params.parts_dir = temporary ? args->out + ".parts-" + std::to_string(getpid()) : args->parts_dir;
     struct RemoveOnExit {
@@ -80,61 +69,67 @@ void add_simplify_command(CLI::App& app, int& exit_status) {
         if (!dir.empty()) std::filesystem::remove_all(dir, ec);
       }
     } cleanup{temporary ? params.parts_dir : ""};
-    parallel::DistributedReport report;
-    std::size_t parts = parallel::partition_to_files(input, params.vertices_per_part, params.parts_dir, report);
-    write_partition_info(params.parts_dir, parts, diagonal);
-    input = {};
-    report.independent_sets = parallel::independent_sets(report.adjacency, params.workers);
-    parallel::simplify_part_files(params.parts_dir, parts, params, report);
-    mesh::Mesh output = parallel::merge_part_files(params.parts_dir, parts, params, report);
+    std::unique_ptr<parallel::NodeDispatch> nodes;
+    if (!args->nodes.empty()) {
+      std::vector<std::string> urls;
+      std::stringstream list(args->nodes);
+      for (std::string url; std::getline(list, url, ',');)
+        if (!url.empty()) urls.push_back(url);
+      nodes = std::make_unique<parallel::NodeDispatch>(urls, std::filesystem::absolute(params.parts_dir).string());
+      params.workers = static_cast<unsigned>(urls.size());
+      params.runner = [&nodes](std::size_t p, double e) { return nodes->run(p, e); };
+    } else {
+      params.worker_executable = std::filesystem::read_symlink("/proc/self/exe").string();
+    }
+    parallel::DistributedReport report = parallel::simplify_distributed(args->in, args->out, params);
     if (params.progress) std::fprintf(stderr, "\n");
-    mesh::write_mesh(output, args->out);
     if (!args->report.empty()) {
       std::ofstream r(args->report);
       r << report.to_json();
-      if (!r) throw std::runtime_error("cannot write " + args->report);
+      if (!r) throw IoError("cannot write " + args->report);
     }
-    std::printf("%s: %zu parts, %zu vertices, %zu triangles\n", args->out.c_str(), report.parts,
-                output.positions.size(), output.triangles.size());
+    std::printf("%s: %zu parts, %llu vertices, %llu triangles\n", args->out.c_str(), report.partition.parts,
+                (unsigned long long)report.merge.output_vertices, (unsigned long long)report.merge.output_triangles);
     exit_status = 0;
   });
 }
 
 void add_partition_command(CLI::App& app, int& exit_status) {
   auto args = std::make_shared<SimplifyArgs>();
-  CLI::App* cmd = app.add_subcommand("partition", "Cut a mesh into BSP part files (DESIGN §9)");
+  CLI::App* cmd = app.add_subcommand("partition", "Cut a mesh into BSP part files, out of core (DESIGN §9)");
   cmd->add_option("IN", args->in, "Input mesh")->required();
   cmd->add_option("--vertices-per-part", args->vertices_per_part, "Largest part, in vertices")->required();
   cmd->add_option("--parts-dir", args->parts_dir, "Folder for part-<i>.mfp")->required();
+  cmd->add_flag("--progress", args->progress, "Progress bar on stderr even when it is not a terminal");
   cmd->callback([args, &exit_status] {
-    mesh::Mesh input = mesh::read_mesh(args->in);
-    parallel::DistributedReport report;
-    std::size_t parts = parallel::partition_to_files(input, args->vertices_per_part, args->parts_dir, report);
-    write_partition_info(args->parts_dir, parts, mesh::bounding_box(input).diagonal());
-    std::printf("%zu parts, %zu shared vertices, in %s\n", parts, report.seam_vertices, args->parts_dir.c_str());
+    auto bar = terminal_progress(args->progress);
+    std::function<void(double)> progress;
+    if (bar) progress = [&](double f) { bar("partition", f); };
+    parallel::PartitionInfo info = parallel::partition_file(args->in, args->vertices_per_part, args->parts_dir, progress);
+    if (bar) std::fprintf(stderr, "\n");
+    std::printf("%zu parts, %llu shared vertices, in %s\n", info.parts, (unsigned long long)info.shared_vertices,
+                args->parts_dir.c_str());
     exit_status = 0;
   });
 }
 
 void add_merge_command(CLI::App& app, int& exit_status) {
   auto args = std::make_shared<SimplifyArgs>();
-  CLI::App* cmd = app.add_subcommand("merge", "Merge simplified part files and simplify their seams");
+  CLI::App* cmd = app.add_subcommand("merge", "Simplify the seams of simplified part files and merge them into one PLY, out of core");
   cmd->add_option("PARTS_DIR", args->parts_dir, "Folder of part-<i>.simplified.mfp (simplify --parts-dir)")->required();
-  cmd->add_option("-o,--output", args->out, "Output mesh")->required();
+  cmd->add_option("-o,--output", args->out, "Output mesh (.ply)")->required();
   cmd->add_option("--max-error", args->max_error, "Maximum RMS error, % of the input's diagonal")->required();
+  cmd->add_flag("--progress", args->progress, "Progress bar on stderr even when it is not a terminal");
   cmd->callback([args, &exit_status] {
-    if (args->max_error <= 0) throw InvalidInput("--max-error must be > 0 (% of the diagonal)");
-    std::size_t parts = 0;
-    double diagonal = 0;
-    read_partition_info(args->parts_dir, parts, diagonal);
-    parallel::DistributedParams params;
-    params.max_error = args->max_error / 100.0 * diagonal;
-    params.progress = terminal_progress();
-    parallel::DistributedReport report;
-    mesh::Mesh output = parallel::merge_part_files(args->parts_dir, parts, params, report);
-    if (params.progress) std::fprintf(stderr, "\n");
-    mesh::write_mesh(output, args->out);
-    std::printf("%s: %zu vertices, %zu triangles\n", args->out.c_str(), output.positions.size(), output.triangles.size());
+    if (!(args->max_error > 0)) throw InvalidInput("--max-error must be > 0 (% of the diagonal)");
+    if (args->out.size() < 4 || args->out.compare(args->out.size() - 4, 4, ".ply") != 0)
+      throw InvalidInput(args->out + ": merge writes canonical PLY; name the output *.ply");
+    parallel::PartitionInfo info = parallel::read_partition_info(args->parts_dir);
+    auto bar = terminal_progress(args->progress);
+    parallel::MergeReport r = parallel::merge_parts(args->parts_dir, info.parts, args->max_error / 100.0 * info.diagonal, args->out, bar);
+    if (bar) std::fprintf(stderr, "\n");
+    std::printf("%s: %llu vertices, %llu triangles\n", args->out.c_str(), (unsigned long long)r.output_vertices,
+                (unsigned long long)r.output_triangles);
     exit_status = 0;
   });
 }
@@ -150,7 +145,7 @@ void add_part_simplify_command(CLI::App& app, int& exit_status) {
   cmd->add_option("--max-error-abs", *max_error, "Maximum RMS error, absolute")->required();
   cmd->callback([dir, part, max_error, &exit_status] {
     if (*max_error <= 0) throw InvalidInput("--max-error-abs must be > 0");
-    parallel::simplify_one_part(*dir, *part, *max_error);
+    std::printf("%s\n", parallel::simplify_one_part(*dir, *part, *max_error).to_json().c_str());
     exit_status = 0;
   });
 }

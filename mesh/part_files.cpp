@@ -3,6 +3,7 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <sstream>
 
 #include "mesh/errors.h"
 
@@ -115,6 +116,67 @@ PartFile read_part(const std::string& path) {
   if (!in) throw IoError(path + ": cannot open the part file");
   std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   return decode_part(bytes, path);
+}
+
+std::string encode_parts_index(const PartsIndex& index) {
+  std::ostringstream out;
+  out.precision(17);  // the diagonal round-trips exactly, whatever the mesh's scale
+  out << "parts " << index.parts << "\ndiagonal " << index.diagonal << "\n";
+  for (std::size_t p = 0; p < index.adjacency.size(); ++p) {
+    out << "neighbours " << p;
+    for (auto q : index.adjacency[p]) out << ' ' << q;
+    out << '\n';
+  }
+  return out.str();
+}
+
+PartsIndex decode_parts_index(std::string_view text, const std::string& name) {
+  PartsIndex index;
+  std::size_t line_no = 0, at = 0;
+  auto fail = [&](const std::string& reason) {
+    throw ParseError({.file = name, .line = line_no, .column = {}, .byte_offset = {}}, reason);
+  };
+  auto next_line = [&](std::string& line) {
+    if (at >= text.size()) return false;
+    std::size_t end = text.find('\n', at);
+    if (end == std::string_view::npos) end = text.size();
+    line.assign(text.substr(at, end - at));
+    at = end + 1;
+    ++line_no;
+    return true;
+  };
+  std::string line, key, extra;
+  if (!next_line(line)) fail("expected \"parts N\"");
+  {
+    std::istringstream words(line);
+    long long n = -1;
+    if (!(words >> key >> n) || key != "parts" || n < 0 || n > (1 << 24) || (words >> extra)) fail("expected \"parts N\" (N < 2^24)");
+    index.parts = static_cast<std::size_t>(n);
+    if (index.parts > text.size() / 12) fail("more parts than neighbour lines can follow");
+  }
+  if (!next_line(line)) fail("expected \"diagonal X\"");
+  {
+    std::istringstream words(line);
+    if (!(words >> key >> index.diagonal) || key != "diagonal" || !(index.diagonal >= 0) || index.diagonal > 1e300 ||
+        (words >> extra))
+      fail("expected \"diagonal X\" (X >= 0)");
+  }
+  index.adjacency.assign(index.parts, {});
+  for (std::size_t p = 0; p < index.parts; ++p) {
+    if (!next_line(line)) fail("expected \"neighbours " + std::to_string(p) + " ...\"");
+    std::istringstream words(line);
+    long long got = -1, q;
+    if (!(words >> key >> got) || key != "neighbours" || got != static_cast<long long>(p))
+      fail("expected \"neighbours " + std::to_string(p) + " ...\"");
+    while (words >> q) {
+      if (q < 0 || q >= static_cast<long long>(index.parts) || q == got) fail("neighbour " + std::to_string(q) + " is not another part");
+      if (!index.adjacency[p].empty() && q <= index.adjacency[p].back()) fail("neighbours must ascend");
+      index.adjacency[p].push_back(static_cast<std::uint32_t>(q));
+    }
+    if (!words.eof()) fail("expected part numbers");
+  }
+  if (next_line(line)) fail("unexpected text after the last part");
+  return index;
 }
 
 }  // namespace meshflow::mesh

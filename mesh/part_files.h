@@ -6,11 +6,13 @@
 //
 // Binary, little-endian: "MFPART1\n", u64 #V, u64 #T, u8 has_quadrics, then per vertex
 // u64 global id, 3 x f32 position, u8 shared, [11 x f64 quadric]; then per triangle 3 x u32.
+// A part's boundary is its shared flags.
 
 #include <array>
 #include <cstdint>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "mesh/mesh.h"
@@ -31,5 +33,16 @@ PartFile decode_part(std::span<const std::uint8_t> bytes, const std::string& nam
 
 void write_part(const PartFile& part, const std::string& path);
 PartFile read_part(const std::string& path);
+
+// The index of a parts folder (partition.txt), text:
+//   parts N / diagonal X (17 significant digits) / one "neighbours P Q..." line per part.
+struct PartsIndex {
+  std::size_t parts = 0;
+  double diagonal = 0;                                  // of the whole input's bounding box
+  std::vector<std::vector<std::uint32_t>> adjacency;    // parts sharing a vertex, ascending
+};
+std::string encode_parts_index(const PartsIndex& index);
+// \throws ParseError naming `name` and the line on any malformed content.
+PartsIndex decode_parts_index(std::string_view text, const std::string& name);
 
 }  // namespace meshflow::mesh

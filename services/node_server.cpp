@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <chrono>
 #include <condition_variable>
+#include <fstream>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -18,6 +20,7 @@
 #include "protocol/http_server.h"
 #include "protocol/mesh_cache.h"
 #include "services/operation.h"
+#include "services/part_simplify.h"
 
 namespace meshflow::services {
 namespace {
@@ -219,6 +222,95 @@ struct NodeServer::Impl {
             {"wait_ms", loaded.wait_ms}};
   }
 
+  // Runs `work` on its own thread; answers its result, or 202 with a task URL to poll when it
+  // takes longer than options.answer_within (DESIGN §4).
+  void answer_as_task(httplib::Response& res, std::function<json(const std::atomic<bool>&)> work) {
+    auto task = std::make_shared<Task>();
+    std::string id;
+    {
+      std::lock_guard lock(tasks_mutex);
+      std::erase_if(tasks, [](const auto& entry) {
+        return entry.second->state != "running" && Clock::now() - entry.second->finished > kKeepFinishedTasks;
+      });
+      id = std::to_string(next_task++);
+      tasks[id] = task;
+    }
+    std::thread([this, task, work] {
+      json result;
+      std::string error;
+      int status = 500;
+      try {
+        result = work(task->cancel);
+      } catch (...) {
+        protocol::ErrorReply reply = protocol::error_reply(std::current_exception());
+        error = reply.body;
+        status = reply.status;
+      }
+      std::lock_guard lock(tasks_mutex);
+      if (task->cancel) task->state = "cancelled";
+      else if (error.empty()) task->state = "done";
+      else task->state = "failed";
+      task->result = std::move(result);
+      task->error = std::move(error);
+      task->error_status = status;
+      task->finished = Clock::now();
+      task_done.notify_all();
+    }).detach();
+    std::unique_lock lock(tasks_mutex);
+    task_done.wait_for(lock, options.answer_within, [&] { return task->state != "running"; });
+    if (task->state == "running") {
+      res.status = 202;
+      res.set_content(json{{"task", url() + "/tasks/" + id}, {"state", "running"}}.dump(),
+                      "application/json");
+      return;
+    }
+    tasks.erase(id);
+    if (task->state == "done") {
+      res.set_content(task->result.dump(), "application/json");
+    } else {
+      res.status = task->state == "cancelled" ? 409 : task->error_status;
+      res.set_content(task->error.empty() ? R"({"error":"cancelled"})" : task->error,
+                      "application/json");
+    }
+  }
+
+  json run_part(const json& body) {
+    const std::string part_url = required_string(body, "vertices");
+    if (body.contains("triangles") && !(body["triangles"].is_string() && body["triangles"] == part_url))
+      throw InvalidInput("'triangles' must name the same part file as 'vertices' (one .mfp holds both)");
+    if (body.contains("removed") && !(body["removed"].is_array() && body["removed"].empty()))
+      throw InvalidInput("'removed' must be empty: parts keep their shared vertices fixed and the coordinator simplifies the seams");
+    auto e = body.find("max_error_abs");
+    if (e == body.end() || !e->is_number() || !(e->get<double>() > 0))
+      throw InvalidInput("'max_error_abs' must be a number > 0");
+    check_fetch_origin(part_url);
+    const auto incoming = cache->files_dir() / ("incoming-" + std::to_string(next_incoming++) + ".mfp");
+    protocol::DownloadResult got = protocol::http_download(part_url, incoming.string());
+    if (!got.ok()) throw IoError("cannot fetch the part " + part_url + ": " + got.describe());
+    std::vector<std::uint8_t> bytes;
+    {
+      std::ifstream in(incoming, std::ios::binary);
+      bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    }
+    std::filesystem::remove(incoming);
+    mesh::PartFile part = mesh::decode_part(bytes, part_url);
+    bytes = {};
+    if (part.positions.size() > options.capacity_vertices)
+      throw LimitExceeded("part larger than this node's capacity in vertices", options.capacity_vertices, part.positions.size());
+    running++;
+    struct Done {
+      std::atomic<int>& n;
+      ~Done() { n--; }
+    } done{running};
+    PartStats stats;
+    std::vector<std::uint8_t> out = mesh::encode_part(simplify_part(part, e->get<double>(), &stats));
+    std::string sha = mesh::sha256_hex(out.data(), out.size());
+    cache->store_file(sha + ".mfp", std::string(out.begin(), out.end()));
+    return {{"part", file_url(sha + ".mfp")}, {"sha256", sha}, {"removed", json::array()},
+            {"stats", json::parse(stats.to_json())}};
+  }
+  std::atomic<std::uint64_t> next_incoming{1};
+
   void routes() {
     protocol::install_error_handling(server);
     server.Get("/healthz", [](const httplib::Request&, httplib::Response& res) {
@@ -278,53 +370,13 @@ struct NodeServer::Impl {
       std::string name = req.matches[1];
       find_operation(name);  // unknown names: 400 before a task starts
       if (!offers(name)) throw protocol::NotFound("this node does not offer " + name);
-      auto task = std::make_shared<Task>();
-      std::string id;
-      {
-        std::lock_guard lock(tasks_mutex);
-        std::erase_if(tasks, [](const auto& entry) {
-          return entry.second->state != "running" && Clock::now() - entry.second->finished > kKeepFinishedTasks;
-        });
-        id = std::to_string(next_task++);
-        tasks[id] = task;
-      }
-      std::thread([this, task, name, body] {
-        json result;
-        std::string error;
-        int status = 500;
-        try {
-          result = run_operation(name, body, task->cancel);
-        } catch (...) {
-          protocol::ErrorReply reply = protocol::error_reply(std::current_exception());
-          error = reply.body;
-          status = reply.status;
-        }
-        std::lock_guard lock(tasks_mutex);
-        if (task->cancel) task->state = "cancelled";
-        else if (error.empty()) task->state = "done";
-        else task->state = "failed";
-        task->result = std::move(result);
-        task->error = std::move(error);
-        task->error_status = status;
-        task->finished = Clock::now();
-        task_done.notify_all();
-      }).detach();
-      std::unique_lock lock(tasks_mutex);
-      task_done.wait_for(lock, options.answer_within, [&] { return task->state != "running"; });
-      if (task->state == "running") {
-        res.status = 202;
-        res.set_content(json{{"task", url() + "/tasks/" + id}, {"state", "running"}}.dump(),
-                        "application/json");
-        return;
-      }
-      tasks.erase(id);
-      if (task->state == "done") {
-        res.set_content(task->result.dump(), "application/json");
-      } else {
-        res.status = task->state == "cancelled" ? 409 : task->error_status;
-        res.set_content(task->error.empty() ? R"({"error":"cancelled"})" : task->error,
-                        "application/json");
-      }
+      answer_as_task(res, [this, name, body](const std::atomic<bool>& cancel) { return run_operation(name, body, cancel); });
+    });
+    // DESIGN §9's per-part step (services/part_simplify.h) on a part file fetched over HTTP.
+    server.Post("/parts/simplify", [this](const httplib::Request& req, httplib::Response& res) {
+      require_token(req);
+      json body = parse_body(req);
+      answer_as_task(res, [this, body](const std::atomic<bool>&) { return run_part(body); });
     });
     server.Get(R"(/tasks/(\d+))", [this](const httplib::Request& req, httplib::Response& res) {
       std::lock_guard lock(tasks_mutex);
@@ -351,6 +403,10 @@ struct NodeServer::Impl {
     server.Get(R"(/files/([0-9a-f]{64}\.ply\.zst))", [this](const httplib::Request& req, httplib::Response& res) {
       std::string name = req.matches[1];
       protocol::serve_file(req, res, cache->mesh_path(name.substr(0, 64)).string(), "application/zstd");
+    });
+    server.Get(R"(/files/([0-9a-f]{64}\.mfp))", [this](const httplib::Request& req, httplib::Response& res) {
+      protocol::serve_file(req, res, (cache->files_dir() / std::string(req.matches[1])).string(),
+                           "application/octet-stream");
     });
     server.Get(R"(/files/([0-9a-f]{64}-[0-9a-f]{64}\.mfc))", [this](const httplib::Request& req, httplib::Response& res) {
       protocol::serve_file(req, res, (cache->files_dir() / std::string(req.matches[1])).string(),

@@ -9,9 +9,12 @@
 #include "mesh/generate.h"
 #include "mesh/mesh_io.h"
 #include "tests/support/meshes.h"
+#include "tests/support/process.h"
 
 namespace meshflow::parallel {
 namespace {
+
+using mesh::Mesh;
 
 struct Outcome {
   int status;
@@ -54,12 +57,98 @@ TEST(SimplifyCommand, RefusesBadInputClearly) {
   r = run(dir, "simplify " + dir.file("bad.off") + " -o " + dir.file("o.ply") + " --max-error 0");
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("--max-error"), std::string::npos) << r.err;
-  r = run(dir, "simplify " + dir.file("bad.off") + " -o " + dir.file("o.ply") + " --max-error 0.1 --nodes http://127.0.0.1:1");
+  std::ofstream(dir.file("ok.off")) << "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  r = run(dir, "simplify " + dir.file("ok.off") + " -o " + dir.file("o.ply") + " --max-error 0.1 --nodes http://127.0.0.1:1");
   EXPECT_EQ(r.status, 2);
-  EXPECT_NE(r.err.find("not implemented"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("http://127.0.0.1:1 is not a reachable mesh node"), std::string::npos) << r.err;
   r = run(dir, "merge " + dir.file("nowhere") + " -o " + dir.file("o.ply") + " --max-error 0.1");
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("partition.txt"), std::string::npos) << r.err;
+}
+
+// Two real nodes on loopback simplify the parts (POST /parts/simplify); the result is the
+// same as with local worker processes, and with one node as with two.
+TEST(SimplifyCommand, NodesGiveTheSameResultAsLocalWorkers) {
+  meshflow::testing::TempDir dir;
+  mesh::GenerateParams g;
+  g.shape = mesh::Shape::Terrain;
+  g.triangles = 30000;
+  mesh::generate_mesh(g, dir.file("in.ply"));
+  meshflow::testing::ChildProcess a({MESHFLOW_BINARY, "node", "--listen", "127.0.0.1:0", "--data", dir.file("a")});
+  meshflow::testing::ChildProcess b({MESHFLOW_BINARY, "node", "--listen", "127.0.0.1:0", "--data", dir.file("b"),
+                                     "--answer-within-ms", "1"});  // b answers with a task to poll
+  std::string url_a = a.ready_url(), url_b = b.ready_url();
+  ASSERT_FALSE(url_a.empty());
+  ASSERT_FALSE(url_b.empty());
+  const std::string common = dir.file("in.ply") + " --max-error 0.1 --vertices-per-part 3000";
+  Outcome r = run(dir, "simplify " + common + " -o " + dir.file("local.ply") + " --workers 2");
+  ASSERT_EQ(r.status, 0) << r.err;
+  r = run(dir, "simplify " + common + " -o " + dir.file("two.ply") + " --nodes " + url_a + "," + url_b + " --report " + dir.file("r.json"));
+  ASSERT_EQ(r.status, 0) << r.err;
+  r = run(dir, "simplify " + common + " -o " + dir.file("one.ply") + " --nodes " + url_b);
+  ASSERT_EQ(r.status, 0) << r.err;
+  Mesh local = mesh::read_mesh(dir.file("local.ply"));
+  EXPECT_LT(local.positions.size(), 15000u / 2);
+  EXPECT_TRUE(mesh::read_mesh(dir.file("two.ply")) == local);
+  EXPECT_TRUE(mesh::read_mesh(dir.file("one.ply")) == local);
+  std::ifstream report(dir.file("r.json"));
+  std::string json((std::istreambuf_iterator<char>(report)), std::istreambuf_iterator<char>());
+  EXPECT_NE(json.find("\"vertices_in\": "), std::string::npos) << json;  // the nodes' stats came back
+  EXPECT_EQ(json.find("\"vertices_in\": 0,"), std::string::npos) << json;
+  // A node refuses a part file it cannot read, naming it.
+  std::ofstream(dir.file("junk.mfp")) << "MFPART1\n";
+  std::string body = R"({"vertices": ")" + url_a + R"(/nowhere.mfp", "max_error_abs": 0.1})";
+  int raw = std::system(("curl -s -m 20 -o " + dir.file("answer") + " -w '%{http_code}' -d '" + body + "' " + url_a +
+                         "/parts/simplify > " + dir.file("code")).c_str());
+  ASSERT_EQ(raw, 0);
+  std::ifstream code(dir.file("code"));
+  std::string status;
+  code >> status;
+  EXPECT_EQ(status[0], '5') << status;  // the fetch failed: a 5xx naming the URL
+  std::ifstream answer(dir.file("answer"));
+  std::string text((std::istreambuf_iterator<char>(answer)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("nowhere.mfp"), std::string::npos) << text;
+  body = R"({"vertices": ")" + url_a + R"(/x.mfp", "max_error_abs": 0})";
+  raw = std::system(("curl -s -m 20 -o /dev/null -w '%{http_code}' -d '" + body + "' " + url_a + "/parts/simplify > " +
+                     dir.file("code")).c_str());
+  std::ifstream code2(dir.file("code"));
+  code2 >> status;
+  EXPECT_EQ(status, "400");
+}
+
+// A node that answers /service.json but drops every /parts/simplify connection: its parts go
+// to the other node; with no other node the run fails naming it.
+TEST(SimplifyCommand, PartsOfANodeThatStopsAnsweringGoElsewhere) {
+  meshflow::testing::TempDir dir;
+  mesh::GenerateParams g;
+  g.shape = mesh::Shape::Sphere;
+  g.triangles = 20000;
+  mesh::generate_mesh(g, dir.file("in.ply"));
+  std::ofstream(dir.file("stub.py")) << R"(import http.server, socketserver, sys
+class H(http.server.BaseHTTPRequestHandler):
+    def do_GET(self):
+        self.send_response(200); self.send_header('Content-Type', 'application/json'); self.end_headers(); self.wfile.write(b'{}')
+    def do_POST(self):
+        self.close_connection = True; self.connection.close()
+    def log_message(self, *a): pass
+s = socketserver.TCPServer(('127.0.0.1', 0), H)
+print('stub ready at http://127.0.0.1:%d' % s.server_address[1], flush=True)
+s.serve_forever()
+)";
+  meshflow::testing::ChildProcess stub({"/usr/bin/python3", dir.file("stub.py")});
+  meshflow::testing::ChildProcess node({MESHFLOW_BINARY, "node", "--listen", "127.0.0.1:0", "--data", dir.file("n")});
+  std::string stub_url = stub.ready_url(), node_url = node.ready_url();
+  ASSERT_FALSE(stub_url.empty());
+  ASSERT_FALSE(node_url.empty());
+  const std::string common = dir.file("in.ply") + " --max-error 0.1 --vertices-per-part 2000";
+  Outcome r = run(dir, "simplify " + common + " -o " + dir.file("local.ply") + " --workers 1");
+  ASSERT_EQ(r.status, 0) << r.err;
+  r = run(dir, "simplify " + common + " -o " + dir.file("nodes.ply") + " --nodes " + stub_url + "," + node_url);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(mesh::read_mesh(dir.file("nodes.ply")) == mesh::read_mesh(dir.file("local.ply")));
+  r = run(dir, "simplify " + common + " -o " + dir.file("none.ply") + " --nodes " + stub_url);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("every node stopped answering: " + stub_url), std::string::npos) << r.err;
 }
 
 }  // namespace

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
+#include <map>
 
 #include "mesh/errors.h"
 #include "mesh/generate.h"
@@ -11,6 +13,7 @@
 #include "mesh/part_files.h"
 #include "parallel/bsp_partition.h"
 #include "services/compare.h"
+#include "services/part_simplify.h"
 #include "services/simplify.h"
 #include "tests/support/meshes.h"
 
@@ -19,17 +22,18 @@ namespace {
 
 using mesh::Mesh;
 
-Mesh generated(mesh::Shape shape, std::uint64_t triangles) {
-  meshflow::testing::TempDir dir;
+std::string generated(const meshflow::testing::TempDir& dir, mesh::Shape shape, std::uint64_t triangles) {
   mesh::GenerateParams g;
   g.shape = shape;
   g.triangles = triangles;
-  mesh::generate_mesh(g, dir.file("m.ply"));
-  return mesh::read_mesh(dir.file("m.ply"));
+  std::string path = dir.file(shape == mesh::Shape::Sphere ? "sphere.ply" : "terrain.ply");
+  mesh::generate_mesh(g, path);
+  return path;
 }
 
 TEST(BspPartition, CellsCoverEveryVertexAndStayNearTheLimit) {
-  Mesh m = generated(mesh::Shape::Terrain, 100000);
+  meshflow::testing::TempDir dir;
+  Mesh m = mesh::read_mesh(generated(dir, mesh::Shape::Terrain, 100000));
   BspPartition p = bsp_partition(m, 5000);
   EXPECT_GE(p.cells, m.positions.size() / 5000);
   std::vector<std::size_t> count(p.cells, 0);
@@ -44,26 +48,106 @@ TEST(BspPartition, CellsCoverEveryVertexAndStayNearTheLimit) {
   EXPECT_THROW(bsp_partition(m, 0), InvalidInput);
 }
 
+// What the out-of-core partition must give: every input triangle in exactly one part, with
+// the input's positions; a vertex in two or more parts flagged shared in each, a vertex in one
+// part not; parts adjacent exactly when they share a vertex; parts near the size asked for.
+TEST(Partition, EveryTriangleOnceSharedFlagsAndAdjacencyConsistent) {
+  meshflow::testing::TempDir dir;
+  std::string in = generated(dir, mesh::Shape::Sphere, 60000);
+  Mesh input = mesh::read_mesh(in);
+  PartitionInfo info = partition_file(in, 3000, dir.file("parts"));
+  ASSERT_GE(info.parts, 8u);
+  EXPECT_EQ(info.input_triangles, input.triangles.size());
+  std::map<std::array<mesh::Index, 3>, int> seen;
+  std::map<std::uint64_t, std::vector<std::pair<std::uint32_t, bool>>> parts_of;
+  for (std::size_t p = 0; p < info.parts; ++p) {
+    mesh::PartFile part = mesh::read_part(part_path(dir.file("parts"), p, false));
+    EXPECT_LE(part.positions.size(), 3000u * 2);  // own vertices (sample estimate) plus copies
+    for (std::size_t v = 0; v < part.positions.size(); ++v) {
+      ASSERT_LT(part.global_ids[v], input.positions.size());
+      EXPECT_EQ(part.positions[v], input.positions[part.global_ids[v]]);
+      parts_of[part.global_ids[v]].emplace_back(p, part.shared[v]);
+    }
+    for (const auto& t : part.triangles)
+      seen[{mesh::Index(part.global_ids[t[0]]), mesh::Index(part.global_ids[t[1]]), mesh::Index(part.global_ids[t[2]])}]++;
+  }
+  EXPECT_EQ(seen.size(), input.triangles.size());
+  for (const auto& t : input.triangles) EXPECT_EQ(seen[t], 1);
+  std::uint64_t shared = 0;
+  for (const auto& [gid, uses] : parts_of) {
+    for (const auto& [p, flag] : uses) EXPECT_EQ(flag, uses.size() >= 2) << "vertex " << gid;
+    if (uses.size() >= 2) ++shared;
+    for (const auto& [a, fa] : uses)
+      for (const auto& [b, fb] : uses)
+        if (a != b) EXPECT_TRUE(std::binary_search(info.adjacency[a].begin(), info.adjacency[a].end(), b));
+  }
+  EXPECT_EQ(shared, info.shared_vertices);
+  EXPECT_FALSE(std::filesystem::exists(dir.file("parts/scratch"))) << "scratch files left behind";
+  // partition.txt round-trips.
+  PartitionInfo back = read_partition_info(dir.file("parts"));
+  EXPECT_EQ(back.parts, info.parts);
+  EXPECT_EQ(back.diagonal, info.diagonal);
+  EXPECT_EQ(back.adjacency, info.adjacency);
+}
+
+// A regular grid, where the sample sees a few columns only (the median is the largest sample on
+// one side): found on terrain_fuji_512, which used to come out as one part.
+TEST(Partition, SplitsARegularGridIntoPartsNearTheLimit) {
+  meshflow::testing::TempDir dir;
+  const std::string in = meshflow::testing::shared_meshes() + "/large/terrain_fuji_512.ply";
+  PartitionInfo info = partition_file(in, 5000, dir.file("parts"));
+  EXPECT_GE(info.parts, info.input_vertices / 5000);
+  for (std::size_t p = 0; p < info.parts; ++p) {
+    mesh::PartFile part = mesh::read_part(part_path(dir.file("parts"), p, false));
+    EXPECT_LE(part.positions.size(), 5000u * 2) << "part " << p;
+  }
+}
+
+// The same mesh as binary PLY, ASCII OFF and OBJ gives the same parts.
+TEST(Partition, SamePartsFromEveryFormat) {
+  meshflow::testing::TempDir dir;
+  std::string in = generated(dir, mesh::Shape::Terrain, 20000);
+  Mesh m = mesh::read_mesh(in);
+  mesh::write_mesh(m, dir.file("t.off"));
+  mesh::write_mesh(m, dir.file("t.obj"));
+  PartitionInfo a = partition_file(in, 2000, dir.file("ply"));
+  for (const char* other : {"t.off", "t.obj"}) {
+    SCOPED_TRACE(other);
+    PartitionInfo b = partition_file(dir.file(other), 2000, dir.file(std::string(other) + ".parts"));
+    ASSERT_EQ(a.parts, b.parts);
+    for (std::size_t p = 0; p < a.parts; ++p) {
+      auto pa = mesh::read_part(part_path(dir.file("ply"), p, false));
+      auto pb = mesh::read_part(part_path(dir.file(std::string(other) + ".parts"), p, false));
+      EXPECT_EQ(pa.global_ids, pb.global_ids);
+      EXPECT_EQ(pa.triangles, pb.triangles);
+    }
+  }
+}
+
 // The guarantees of issue 7 against a single-node simplification of the same input: same
 // components and boundary loops (no crack), manifold, watertight when the input is, error
 // within 5 %, vertex count within 10 %, and the same result whatever the number of workers.
 TEST(DistributedSimplify, MatchesSingleNodeWithoutCracks) {
   for (mesh::Shape shape : {mesh::Shape::Terrain, mesh::Shape::Sphere}) {
     SCOPED_TRACE(shape == mesh::Shape::Sphere ? "sphere" : "terrain");
-    Mesh input = generated(shape, 80000);
+    meshflow::testing::TempDir dir;
+    std::string in = generated(dir, shape, 80000);
+    Mesh input = mesh::read_mesh(in);
     double max_error = 0.0005 * mesh::bounding_box(input).diagonal();
     Mesh single = services::simplify(input, {.max_error = max_error}).output;
     auto s = mesh::compute_measures(single);
     double single_error = services::compare(input, single).mean_ab;
     Mesh first;
     for (unsigned workers : {1u, 3u}) {
-      meshflow::testing::TempDir dir;
-      DistributedReport report;
       DistributedParams params;
-      params.max_error = max_error, params.vertices_per_part = 4000, params.workers = workers, params.parts_dir = dir.file("parts");
-      Mesh out = simplify_distributed(input, params, report);
-      EXPECT_GE(report.parts, 8u);
-      EXPECT_GT(report.seam_vertices, 0u);
+      params.max_error_percent = 0.05, params.vertices_per_part = 4000, params.workers = workers;
+      params.parts_dir = dir.file("parts" + std::to_string(workers));
+      DistributedReport report = simplify_distributed(in, dir.file("out.ply"), params);
+      Mesh out = mesh::read_mesh(dir.file("out.ply"));
+      EXPECT_GE(report.partition.parts, 8u);
+      EXPECT_GT(report.partition.shared_vertices, 0u);
+      EXPECT_EQ(report.merge.output_vertices, out.positions.size());
+      EXPECT_EQ(report.merge.output_triangles, out.triangles.size());
       auto d = mesh::compute_measures(out);
       EXPECT_EQ(d.components, s.components);
       EXPECT_EQ(d.boundary_loops, s.boundary_loops);
@@ -78,52 +162,88 @@ TEST(DistributedSimplify, MatchesSingleNodeWithoutCracks) {
   }
 }
 
-TEST(DistributedSimplify, RefusesBadInput) {
-  Mesh m;
-  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
-  m.triangles = {{0, 1, 7}};
+// Every part's shared vertices come out of the per-part step where they went in.
+TEST(PartSimplify, KeepsSharedVerticesInPlace) {
   meshflow::testing::TempDir dir;
-  DistributedReport report;
+  PartitionInfo info = partition_file(generated(dir, mesh::Shape::Sphere, 20000), 2000, dir.file("parts"));
+  ASSERT_GE(info.parts, 2u);
+  mesh::PartFile in = mesh::read_part(part_path(dir.file("parts"), 0, false));
+  services::PartStats stats;
+  mesh::PartFile out = services::simplify_part(in, 0.01 * info.diagonal, &stats);
+  EXPECT_LT(out.positions.size(), in.positions.size());
+  EXPECT_EQ(out.quadrics.size(), out.positions.size());
+  std::map<std::uint64_t, mesh::Point> kept;
+  for (std::size_t v = 0; v < out.positions.size(); ++v) kept[out.global_ids[v]] = out.positions[v];
+  for (std::size_t v = 0; v < in.positions.size(); ++v)
+    if (in.shared[v]) {
+      ASSERT_TRUE(kept.count(in.global_ids[v])) << "shared vertex " << in.global_ids[v] << " removed";
+      EXPECT_EQ(kept[in.global_ids[v]], in.positions[v]);
+    }
+  EXPECT_THROW(services::simplify_part(in, 0, nullptr), InvalidInput);
+}
+
+TEST(DistributedSimplify, RefusesBadInput) {
+  meshflow::testing::TempDir dir;
+  std::ofstream(dir.file("bad.off")) << "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n";
   DistributedParams params;
-  params.max_error = 0.1, params.parts_dir = dir.file("parts");
-  EXPECT_THROW(simplify_distributed(m, params, report), InvalidInput);  // vertex 7 of 3
-  m.triangles = {{0, 1, 2}};
-  params.max_error = 0;
-  EXPECT_THROW(simplify_distributed(m, params, report), InvalidInput);
-  params.max_error = 0.1, params.workers = 0;
-  EXPECT_THROW(simplify_distributed(m, params, report), InvalidInput);
-  // A damaged part file is refused with its name and byte offset.
+  params.max_error_percent = 0.1, params.parts_dir = dir.file("parts");
+  try {
+    simplify_distributed(dir.file("bad.off"), dir.file("o.ply"), params);
+    FAIL() << "a triangle naming vertex 7 of 3 was accepted";
+  } catch (const ParseError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.off:6"), std::string::npos) << e.what();
+  }
+  std::ofstream(dir.file("ok.off")) << "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  params.max_error_percent = 0;
+  EXPECT_THROW(simplify_distributed(dir.file("ok.off"), dir.file("o.ply"), params), InvalidInput);
+  params.max_error_percent = 0.1, params.workers = 0;
+  EXPECT_THROW(simplify_distributed(dir.file("ok.off"), dir.file("o.ply"), params), InvalidInput);
+  // A damaged part file is refused with its name and byte offset, by the per-part step and the merge.
   params.workers = 1;
-  ASSERT_EQ(partition_to_files(m, 10, params.parts_dir, report), 1u);
+  DistributedReport report;
+  report.partition = partition_file(dir.file("ok.off"), 10, params.parts_dir);
+  ASSERT_EQ(report.partition.parts, 1u);
+  report.independent_sets = {{0}};
+  report.max_error_abs = 0.01;
   std::filesystem::resize_file(params.parts_dir + "/part-0.mfp", 30);
   try {
-    simplify_part_files(params.parts_dir, 1, params, report);
+    simplify_parts(params, report);
     FAIL() << "a truncated part file was accepted";
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("part-0.mfp: byte"), std::string::npos) << e.what();
   }
+  std::filesystem::copy_file(params.parts_dir + "/part-0.mfp", params.parts_dir + "/part-0.simplified.mfp");
+  try {
+    merge_parts(params.parts_dir, 1, 0.01, dir.file("o.ply"));
+    FAIL() << "a truncated simplified part was merged";
+  } catch (const ParseError& e) {
+    EXPECT_NE(std::string(e.what()).find("part-0.simplified.mfp: byte"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir.file("o.ply")));
+  EXPECT_THROW(merge_parts(params.parts_dir, 1, 0, dir.file("o.ply")), InvalidInput);
+  std::ofstream(params.parts_dir + "/partition.txt") << "parts 1\ndiagonal 2\nneighbours 0 5\n";
+  EXPECT_THROW(read_partition_info(params.parts_dir), InvalidInput);
 }
 
 TEST(IndependentSets, NoTwoAdjacentPartsTogetherAndEveryPartOnce) {
-  Mesh m = generated(mesh::Shape::Sphere, 40000);
   meshflow::testing::TempDir dir;
-  DistributedReport report;
-  std::size_t parts = partition_to_files(m, 1500, dir.file("parts"), report);
+  PartitionInfo info = partition_file(generated(dir, mesh::Shape::Sphere, 40000), 1500, dir.file("parts"));
+  const std::size_t parts = info.parts;
   ASSERT_GE(parts, 8u);
   for (std::size_t max_set : {1u, 2u, 4u}) {
-    auto sets = independent_sets(report.adjacency, max_set);
+    auto sets = independent_sets(info.adjacency, max_set);
     std::vector<int> seen(parts, 0);
     for (const auto& set : sets) {
       EXPECT_LE(set.size(), max_set);
       for (auto a : set) {
         seen[a]++;
         for (auto b : set)
-          EXPECT_FALSE(std::binary_search(report.adjacency[a].begin(), report.adjacency[a].end(), b));
+          EXPECT_FALSE(std::binary_search(info.adjacency[a].begin(), info.adjacency[a].end(), b));
       }
     }
     EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), static_cast<long>(parts));
   }
-  EXPECT_THROW(independent_sets(report.adjacency, 0), InvalidInput);
+  EXPECT_THROW(independent_sets(info.adjacency, 0), InvalidInput);
 }
 
 TEST(PartFiles, RoundTripAndRefuseDamage) {
@@ -149,6 +269,23 @@ TEST(PartFiles, RoundTripAndRefuseDamage) {
   std::vector<std::uint8_t> empty_with_flag = mesh::encode_part(mesh::PartFile{});
   empty_with_flag.back() = 1;
   EXPECT_THROW(mesh::decode_part(empty_with_flag, "p.mfp"), ParseError);
+}
+
+TEST(PartsIndex, RoundTripAndRefuseDamageWithLine) {
+  mesh::PartsIndex index{3, 1.0 / 3.0, {{1, 2}, {0}, {0}}};
+  mesh::PartsIndex back = mesh::decode_parts_index(mesh::encode_parts_index(index), "partition.txt");
+  EXPECT_EQ(back.parts, 3u);
+  EXPECT_EQ(back.diagonal, index.diagonal);
+  EXPECT_EQ(back.adjacency, index.adjacency);
+  for (const char* bad : {"parts 2\ndiagonal 1\nneighbours 0 1\n", "parts 1\ndiagonal -1\nneighbours 0\n",
+                          "parts 2\ndiagonal 1\nneighbours 0 1\nneighbours 1 1\n", "parts 99999999\ndiagonal 1\n"}) {
+    try {
+      mesh::decode_parts_index(bad, "partition.txt");
+      FAIL() << "accepted: " << bad;
+    } catch (const ParseError& e) {
+      EXPECT_NE(std::string(e.what()).find("partition.txt:"), std::string::npos) << e.what();
+    }
+  }
 }
 
 }  // namespace
