@@ -4,6 +4,7 @@
 #include <chrono>
 #include <ctime>
 #include <fstream>
+#include <functional>
 #include <random>
 #include <set>
 #include <sstream>
@@ -64,6 +65,35 @@ std::vector<std::string> words(const std::string& q) {
   if (!cur.empty()) out.push_back(cur);
   if (out.size() > 8) out.resize(8);
   return out;
+}
+
+// The operation of the step a validation error points at: the step (or its parameter or
+// condition) starting last at or before the error's line.
+std::string operation_at(const engine::Workflow& workflow, std::uint64_t line) {
+  std::string best;
+  int best_line = 0;
+  auto consider = [&](const engine::Location& at, const std::string& operation) {
+    if (at.line > 0 && static_cast<std::uint64_t>(at.line) <= line && at.line >= best_line &&
+        !operation.empty()) {
+      best_line = at.line;
+      best = operation;
+    }
+  };
+  std::function<void(const engine::Body&)> walk = [&](const engine::Body& body) {
+    for (const auto& task : body) {
+      if (task.kind == engine::Task::Kind::Atomic) {
+        consider(task.at, task.name);
+        for (const auto& p : task.parameters) consider(p.at, task.name);
+      } else {
+        consider(task.at, task.condition.analysis);
+        consider(task.condition.at, task.condition.analysis);
+        walk(task.body);
+        walk(task.else_body);
+      }
+    }
+  };
+  walk(workflow.body);
+  return best;
 }
 
 struct Example {
@@ -185,7 +215,13 @@ struct Repository::Impl {
     if (w.type == "executable" || !w.xml.empty()) {
       if (w.xml.empty()) throw InvalidInput("an executable workflow needs its xml");
       auto parsed = engine::parse_workflow(w.xml, "workflow.xml");
-      engine::validate_workflow(parsed, "workflow.xml", services::operation_specs());
+      try {
+        engine::validate_workflow(parsed, "workflow.xml", services::operation_specs());
+      } catch (const ParseError& e) {
+        auto op = e.where().line ? operation_at(parsed, *e.where().line) : std::string();
+        if (op.empty()) throw;
+        throw StepError(e, op);
+      }
       ops = engine::operations_used(parsed);
     }
     for (const auto& op : ops)
@@ -229,11 +265,16 @@ struct Repository::Impl {
 
 };
 
-Repository::Repository(const std::filesystem::path& data_dir) : impl_(std::make_unique<Impl>()) {
+Repository::Repository(const std::filesystem::path& data_dir, const StoreConfig& config)
+    : impl_(std::make_unique<Impl>()) {
   impl_->dir = data_dir / "repository";
-  impl_->store = std::make_unique<RdfStore>(impl_->dir);
+  std::error_code ec;
+  std::filesystem::create_directories(impl_->dir, ec);
+  if (ec) throw IoError("cannot create " + impl_->dir.string() + ": " + ec.message());
+  impl_->store = open_store(config, impl_->dir);
   bool first = impl_->store->created_now();
   impl_->index = std::make_unique<SearchIndex>(impl_->dir / "search.sqlite");
+  if (first) impl_->index->clear();
   if (first) impl_->store->load_rdfxml(embedded::kOntology, "http://meshflow.org/ontology/wo");
   impl_->load_ontology_maps();
   if (first) {
@@ -332,6 +373,20 @@ SearchPage Repository::search(const SearchQuery& q) {
   filter(q.output, "output", "?w wo:outputType wo:" + q.output);
   filter(cls, "type", "?w a wo:" + cls);
   std::optional<std::set<std::string>> allowed;
+  std::set<std::string> not_runnable;
+  if (q.runnable_with) {
+    if (q.type == "static") return {{}, 0, q.offset, std::min<std::uint64_t>(q.limit, 200)};
+    if (cls.empty()) where += "?w a wo:WorkflowExecutable .\n";
+    // The workflows using an operation no node offers (no NOT EXISTS on Redland: the complement).
+    std::string offered;
+    for (const auto& op : *q.runnable_with) {
+      if (!is_identifier(op)) throw InvalidInput("bad operation name \"" + op + "\"");
+      offered += std::string(offered.empty() ? "" : " && ") + "?o != wo:" + op;
+    }
+    auto r = impl_->store->query(kPrefixes + "SELECT DISTINCT ?w WHERE { ?w wo:usesOperation ?o" +
+                                 (offered.empty() ? "" : " . FILTER(" + offered + ")") + " }");
+    for (auto& row : r.rows) not_runnable.insert(local_name(row[0].value));
+  }
   if (!where.empty()) {
     auto r = impl_->store->query(kPrefixes + "SELECT ?w WHERE {\n" + where + "}");
     allowed.emplace();
@@ -342,7 +397,7 @@ SearchPage Repository::search(const SearchQuery& q) {
                                                    : impl_->index->match(terms);
   std::vector<std::string> hits;
   for (auto& id : ordered)
-    if (!allowed || allowed->count(id)) hits.push_back(std::move(id));
+    if ((!allowed || allowed->count(id)) && !not_runnable.count(id)) hits.push_back(std::move(id));
   SearchPage page;
   page.total = hits.size();
   page.offset = q.offset;

@@ -84,6 +84,13 @@ bool SearchIndex::empty() {
   return !q.row();
 }
 
+void SearchIndex::clear() {
+  std::lock_guard lock(impl_->mutex);
+  if (sqlite3_exec(impl_->db, "DELETE FROM workflows_fts; DELETE FROM workflows;", nullptr, nullptr,
+                   nullptr) != SQLITE_OK)
+    throw IoError(std::string("search index: ") + sqlite3_errmsg(impl_->db));
+}
+
 std::vector<std::string> SearchIndex::match(const std::vector<std::string>& words) {
   std::string expr;
   for (const auto& w : words) {

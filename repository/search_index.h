@@ -21,6 +21,7 @@ class SearchIndex {
   void put(const WorkflowSummary& w);
   void remove(const std::string& id);
   bool empty();
+  void clear();  // a store found empty drops what an earlier store left here
   // Ids whose name or description hold every word (as a word prefix), best bm25 first (name
   // weighs 3, description 1).
   std::vector<std::string> match(const std::vector<std::string>& words);
