@@ -58,6 +58,10 @@ class RdfStore {
   // QueryTimeout, IoError (the backend cannot be reached).
   virtual QueryResult query(const std::string& sparql, const QueryLimits& limits = {},
                             const std::string& graph_format = "turtle") = 0;
+  // The subjects of the triples (?s predicate object), object a URI: one triple pattern, the
+  // search's filters of meaning. Redland answers it from the storage without rasqal.
+  virtual std::vector<std::string> subjects(const std::string& predicate,
+                                            const std::string& object) = 0;
   // Parses an RDF/XML document into the store. \throws ParseError.
   virtual void load_rdfxml(const std::string& text, const std::string& base_uri) = 0;
   // Adds triples in one transaction (Redland) or one update request per batch (Virtuoso).

@@ -353,6 +353,23 @@ QueryResult RedlandStore::query(const std::string& sparql, const QueryLimits& li
   return future.get();
 }
 
+std::vector<std::string> RedlandStore::subjects(const std::string& predicate,
+                                                const std::string& object) {
+  return impl_->run([&] {
+    std::vector<std::string> out;
+    Statement pattern(librdf_new_statement_from_nodes(impl_->world, nullptr,
+                                                      impl_->node(predicate), impl_->node(object)));
+    Stream stream(librdf_model_find_statements(impl_->model, pattern.get()));
+    while (stream && !librdf_stream_end(stream.get())) {
+      librdf_node* s = librdf_statement_get_subject(librdf_stream_get_object(stream.get()));
+      if (s && librdf_node_is_resource(s))
+        out.emplace_back(text(librdf_uri_as_string(librdf_node_get_uri(s))));
+      librdf_stream_next(stream.get());
+    }
+    return out;
+  });
+}
+
 void RedlandStore::load_rdfxml(const std::string& document, const std::string& base_uri) {
   impl_->run([&] {
     impl_->last_log.clear();

@@ -358,25 +358,27 @@ SearchPage Repository::search(const SearchQuery& q) {
   else if (q.type == "executable") cls = "WorkflowExecutable";
   else if (!q.type.empty())
     throw InvalidInput("type must be static or executable, not \"" + q.type + "\"");
-  std::string where;
-  auto filter = [&](const std::string& value, const char* what, const std::string& pattern) {
+  // Each filter is one triple pattern (?w predicate object); the answer is their intersection.
+  std::vector<std::pair<std::string, std::string>> patterns;
+  auto filter = [&](const std::string& value, const char* what, const std::string& predicate,
+                    const std::string& object) {
     if (value.empty()) return;
     if (!is_identifier(value)) throw InvalidInput(std::string("bad ") + what + " \"" + value + "\"");
-    where += pattern + " .\n";
+    patterns.emplace_back(predicate, object);
   };
   if (!q.domain.empty() && !impl_->purpose_parent.count(q.domain))
     throw InvalidInput("unknown purpose \"" + q.domain + "\"");
-  filter(q.creator, "creator", "?w wo:creator <" + std::string(kUserBase) + q.creator + ">");
-  filter(q.operation, "operation", "?w wo:usesOperation wo:" + q.operation);
-  filter(q.domain, "domain", "?w wo:workflowDomain wo:" + q.domain);
-  filter(q.input, "input", "?w wo:inputType wo:" + q.input);
-  filter(q.output, "output", "?w wo:outputType wo:" + q.output);
-  filter(cls, "type", "?w a wo:" + cls);
+  filter(q.creator, "creator", wo("creator"), std::string(kUserBase) + q.creator);
+  filter(q.operation, "operation", wo("usesOperation"), wo(q.operation));
+  filter(q.domain, "domain", wo("workflowDomain"), wo(q.domain));
+  filter(q.input, "input", wo("inputType"), wo(q.input));
+  filter(q.output, "output", wo("outputType"), wo(q.output));
+  filter(cls, "type", kRdfType, wo(cls));
   std::optional<std::set<std::string>> allowed;
   std::set<std::string> not_runnable;
   if (q.runnable_with) {
     if (q.type == "static") return {{}, 0, q.offset, std::min<std::uint64_t>(q.limit, 200)};
-    if (cls.empty()) where += "?w a wo:WorkflowExecutable .\n";
+    if (cls.empty()) patterns.emplace_back(kRdfType, wo("WorkflowExecutable"));
     // The workflows using an operation no node offers (no NOT EXISTS on Redland: the complement).
     std::string offered;
     for (const auto& op : *q.runnable_with) {
@@ -387,10 +389,14 @@ SearchPage Repository::search(const SearchQuery& q) {
                                  (offered.empty() ? "" : " . FILTER(" + offered + ")") + " }");
     for (auto& row : r.rows) not_runnable.insert(local_name(row[0].value));
   }
-  if (!where.empty()) {
-    auto r = impl_->store->query(kPrefixes + "SELECT ?w WHERE {\n" + where + "}");
-    allowed.emplace();
-    for (auto& row : r.rows) allowed->insert(local_name(row[0].value));
+  for (const auto& [predicate, object] : patterns) {
+    std::set<std::string> found;
+    for (auto& uri : impl_->store->subjects(predicate, object)) {
+      auto id = local_name(uri);
+      if (!allowed || allowed->count(id)) found.insert(std::move(id));
+    }
+    allowed = std::move(found);
+    if (allowed->empty()) break;
   }
   auto terms = words(q.q);
   std::vector<std::string> ordered = terms.empty() ? impl_->index->newest_first()

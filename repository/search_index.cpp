@@ -37,6 +37,7 @@ struct Stmt {
 struct SearchIndex::Impl {
   sqlite3* db = nullptr;
   std::mutex mutex;
+  std::optional<std::vector<std::string>> newest;  // newest_first's answer until the next write
 };
 
 SearchIndex::SearchIndex(const std::filesystem::path& file) : impl_(std::make_unique<Impl>()) {
@@ -56,6 +57,7 @@ SearchIndex::~SearchIndex() { sqlite3_close(impl_->db); }
 
 void SearchIndex::put(const WorkflowSummary& w) {
   std::lock_guard lock(impl_->mutex);
+  impl_->newest.reset();
   sqlite3_exec(impl_->db, "BEGIN", nullptr, nullptr, nullptr);
   try {
     Stmt(impl_->db, "DELETE FROM workflows_fts WHERE id = ?").bind(1, w.id).done(impl_->db);
@@ -74,6 +76,7 @@ void SearchIndex::put(const WorkflowSummary& w) {
 
 void SearchIndex::remove(const std::string& id) {
   std::lock_guard lock(impl_->mutex);
+  impl_->newest.reset();
   Stmt(impl_->db, "DELETE FROM workflows_fts WHERE id = ?").bind(1, id).done(impl_->db);
   Stmt(impl_->db, "DELETE FROM workflows WHERE id = ?").bind(1, id).done(impl_->db);
 }
@@ -86,6 +89,7 @@ bool SearchIndex::empty() {
 
 void SearchIndex::clear() {
   std::lock_guard lock(impl_->mutex);
+  impl_->newest.reset();
   if (sqlite3_exec(impl_->db, "DELETE FROM workflows_fts; DELETE FROM workflows;", nullptr, nullptr,
                    nullptr) != SQLITE_OK)
     throw IoError(std::string("search index: ") + sqlite3_errmsg(impl_->db));
@@ -99,9 +103,10 @@ std::vector<std::string> SearchIndex::match(const std::vector<std::string>& word
     expr += (expr.empty() ? "" : " AND ") + ("\"" + quoted + "\"*");
   }
   std::lock_guard lock(impl_->mutex);
+  // Ties in rank: the later row first (a workflow's row is rewritten when it is stored).
   Stmt q(impl_->db,
-         "SELECT workflows_fts.id FROM workflows_fts JOIN workflows ON workflows.id = workflows_fts.id"
-         " WHERE workflows_fts MATCH ? ORDER BY bm25(workflows_fts, 0.0, 3.0, 1.0), workflows.created DESC");
+         "SELECT id FROM workflows_fts WHERE workflows_fts MATCH ?"
+         " ORDER BY bm25(workflows_fts, 0.0, 3.0, 1.0), rowid DESC");
   q.bind(1, expr);
   std::vector<std::string> ids;
   while (q.row()) ids.push_back(q.text(0));
@@ -110,10 +115,13 @@ std::vector<std::string> SearchIndex::match(const std::vector<std::string>& word
 
 std::vector<std::string> SearchIndex::newest_first() {
   std::lock_guard lock(impl_->mutex);
-  Stmt q(impl_->db, "SELECT id FROM workflows ORDER BY created DESC, id");
-  std::vector<std::string> ids;
-  while (q.row()) ids.push_back(q.text(0));
-  return ids;
+  if (!impl_->newest) {
+    Stmt q(impl_->db, "SELECT id FROM workflows ORDER BY created DESC, id");
+    std::vector<std::string> ids;
+    while (q.row()) ids.push_back(q.text(0));
+    impl_->newest = std::move(ids);
+  }
+  return *impl_->newest;
 }
 
 std::optional<WorkflowSummary> SearchIndex::summary(const std::string& id) {

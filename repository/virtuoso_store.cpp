@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <limits>
 #include <mutex>
 #include <nlohmann/json.hpp>
 
@@ -396,6 +397,18 @@ QueryResult VirtuosoStore::query(const std::string& sparql, const QueryLimits& l
     return out;
   }
   return parse_sparql_json(r.body, limits.max_rows);
+}
+
+std::vector<std::string> VirtuosoStore::subjects(const std::string& predicate,
+                                                 const std::string& object) {
+  QueryLimits all;
+  all.max_rows = std::numeric_limits<std::uint64_t>::max();
+  auto r = query("SELECT ?s WHERE { ?s " + iri(predicate) + " " + iri(object) + " }", all);
+  std::vector<std::string> out;
+  out.reserve(r.rows.size());
+  for (auto& row : r.rows)
+    if (!row.empty() && row[0].kind == Term::Kind::Uri) out.push_back(std::move(row[0].value));
+  return out;
 }
 
 void VirtuosoStore::load_rdfxml(const std::string& text, const std::string& base_uri) {

@@ -22,6 +22,8 @@ class VirtuosoStore final : public RdfStore {
   bool created_now() const override;
   QueryResult query(const std::string& sparql, const QueryLimits& limits = {},
                     const std::string& graph_format = "turtle") override;
+  std::vector<std::string> subjects(const std::string& predicate,
+                                    const std::string& object) override;
   void load_rdfxml(const std::string& text, const std::string& base_uri) override;
   void add(const std::vector<Triple>& triples) override;
   void remove_subject(const std::string& subject) override;

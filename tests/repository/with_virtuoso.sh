@@ -50,13 +50,13 @@ sed -e "s|/var/lib/virtuoso-opensource-7/db/|$dir/|g" \
 pid=$!
 endpoint="http://127.0.0.1:$http_port/sparql"
 ready=""
-for _ in $(seq 1 600); do
+for _ in $(seq 1 1200); do
   kill -0 "$pid" 2>/dev/null || break
   if curl -sf -o /dev/null --max-time 2 "$endpoint?query=ASK%7B%7D"; then ready=1; break; fi
   sleep 0.1
 done
 if [ -z "$ready" ]; then
-  echo "with_virtuoso: virtuoso-t did not answer on $endpoint within 60 s; its log:" >&2
+  echo "with_virtuoso: virtuoso-t did not answer on $endpoint within 120 s; its log:" >&2
   tail -20 "$dir/virtuoso.log" "$dir/stdout.log" >&2 2>/dev/null
   exit 1
 fi
