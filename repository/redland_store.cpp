@@ -153,6 +153,8 @@ struct RedlandStore::Impl {
   librdf_world* world = nullptr;
   librdf_storage* storage = nullptr;
   librdf_model* model = nullptr;
+  sqlite3* reader = nullptr;         // the storage's file, read directly by subjects()
+  sqlite3_stmt* subjects = nullptr;
   bool created = false;
   std::string last_log;  // the last message Redland logged (worker thread only)
 
@@ -197,9 +199,24 @@ struct RedlandStore::Impl {
                    nullptr);
     }
     sqlite3_close(sql);
+    // subjects(): one pattern (?s p o) straight from the storage's tables, without building
+    // librdf nodes and rasqal rows for thousands of matches; memory-mapped, as every call
+    // scans the triples table (GROUND.md §1: no index on it).
+    if (sqlite3_open_v2(db.c_str(), &reader, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK ||
+        sqlite3_exec(reader, "PRAGMA mmap_size=1073741824; PRAGMA cache_size=-65536", nullptr,
+                     nullptr, nullptr) != SQLITE_OK ||
+        sqlite3_prepare_v2(reader,
+                           "SELECT s.uri FROM triples t JOIN uris s ON s.id = t.subjectUri"
+                           " WHERE t.predicateUri = (SELECT id FROM uris WHERE uri = ?1)"
+                           " AND t.objectUri = (SELECT id FROM uris WHERE uri = ?2)",
+                           -1, &subjects, nullptr) != SQLITE_OK)
+      throw IoError("cannot read the RDF store " + db + ": " + sqlite3_errmsg(reader));
   }
 
   void close() {
+    sqlite3_finalize(subjects);
+    sqlite3_close(reader);
+    subjects = nullptr; reader = nullptr;
     if (model) librdf_free_model(model);
     if (storage) librdf_free_storage(storage);
     if (world) librdf_free_world(world);
@@ -357,15 +374,16 @@ std::vector<std::string> RedlandStore::subjects(const std::string& predicate,
                                                 const std::string& object) {
   return impl_->run([&] {
     std::vector<std::string> out;
-    Statement pattern(librdf_new_statement_from_nodes(impl_->world, nullptr,
-                                                      impl_->node(predicate), impl_->node(object)));
-    Stream stream(librdf_model_find_statements(impl_->model, pattern.get()));
-    while (stream && !librdf_stream_end(stream.get())) {
-      librdf_node* s = librdf_statement_get_subject(librdf_stream_get_object(stream.get()));
-      if (s && librdf_node_is_resource(s))
-        out.emplace_back(text(librdf_uri_as_string(librdf_node_get_uri(s))));
-      librdf_stream_next(stream.get());
-    }
+    sqlite3_stmt* q = impl_->subjects;
+    sqlite3_reset(q);
+    sqlite3_bind_text(q, 1, predicate.c_str(), static_cast<int>(predicate.size()), SQLITE_STATIC);
+    sqlite3_bind_text(q, 2, object.c_str(), static_cast<int>(object.size()), SQLITE_STATIC);
+    int rc;
+    while ((rc = sqlite3_step(q)) == SQLITE_ROW)
+      if (auto* uri = sqlite3_column_text(q, 0)) out.emplace_back(text(uri));
+    sqlite3_reset(q);
+    if (rc != SQLITE_DONE)
+      throw IoError(std::string("cannot read the RDF store: ") + sqlite3_errmsg(impl_->reader));
     return out;
   });
 }

@@ -3,7 +3,8 @@
 // runs every request from a queue (rasqal and the sqlite storage are not safe to share between
 // threads). SQLite storage under a folder, with the literal index of GROUND.md §1. Queries are
 // stopped at their deadline from inside rasqal: the storage is sqlite wrapped so that every
-// triple stream it hands rasqal ends once the deadline has passed.
+// triple stream it hands rasqal ends once the deadline has passed. subjects() reads the
+// storage's tables with SQL (one pattern needs no rasqal).
 
 #include <filesystem>
 #include <memory>

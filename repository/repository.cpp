@@ -8,6 +8,7 @@
 #include <random>
 #include <set>
 #include <sstream>
+#include <unordered_set>
 
 #include "engine/validate.h"
 #include "engine/workflow_parser.h"
@@ -374,8 +375,8 @@ SearchPage Repository::search(const SearchQuery& q) {
   filter(q.input, "input", wo("inputType"), wo(q.input));
   filter(q.output, "output", wo("outputType"), wo(q.output));
   filter(cls, "type", kRdfType, wo(cls));
-  std::optional<std::set<std::string>> allowed;
-  std::set<std::string> not_runnable;
+  std::optional<std::unordered_set<std::string>> allowed;
+  std::unordered_set<std::string> not_runnable;
   if (q.runnable_with) {
     if (q.type == "static") return {{}, 0, q.offset, std::min<std::uint64_t>(q.limit, 200)};
     if (cls.empty()) patterns.emplace_back(kRdfType, wo("WorkflowExecutable"));
@@ -390,7 +391,7 @@ SearchPage Repository::search(const SearchQuery& q) {
     for (auto& row : r.rows) not_runnable.insert(local_name(row[0].value));
   }
   for (const auto& [predicate, object] : patterns) {
-    std::set<std::string> found;
+    std::unordered_set<std::string> found;
     for (auto& uri : impl_->store->subjects(predicate, object)) {
       auto id = local_name(uri);
       if (!allowed || allowed->count(id)) found.insert(std::move(id));
@@ -399,15 +400,20 @@ SearchPage Repository::search(const SearchQuery& q) {
     if (allowed->empty()) break;
   }
   auto terms = words(q.q);
+  SearchPage page;
+  page.offset = q.offset;
+  page.limit = std::min<std::uint64_t>(q.limit, 200);
+  if (!allowed && not_runnable.empty() && !terms.empty()) {  // text alone: the index pages
+    for (auto& id : impl_->index->match_page(terms, q.offset, page.limit, page.total))
+      if (auto w = impl_->index->summary(id)) page.workflows.push_back(*w);
+    return page;
+  }
   std::vector<std::string> ordered = terms.empty() ? impl_->index->newest_first()
                                                    : impl_->index->match(terms);
   std::vector<std::string> hits;
   for (auto& id : ordered)
     if ((!allowed || allowed->count(id)) && !not_runnable.count(id)) hits.push_back(std::move(id));
-  SearchPage page;
   page.total = hits.size();
-  page.offset = q.offset;
-  page.limit = std::min<std::uint64_t>(q.limit, 200);
   for (auto i = q.offset; i < hits.size() && i < q.offset + page.limit; ++i)
     if (auto w = impl_->index->summary(hits[i])) page.workflows.push_back(*w);
   return page;

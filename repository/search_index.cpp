@@ -44,7 +44,7 @@ SearchIndex::SearchIndex(const std::filesystem::path& file) : impl_(std::make_un
   if (sqlite3_open(file.string().c_str(), &impl_->db) != SQLITE_OK)
     throw IoError("cannot open " + file.string());
   const char* schema =
-      "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL;"
+      "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL; PRAGMA mmap_size=1073741824;"
       "CREATE TABLE IF NOT EXISTS workflows(id TEXT PRIMARY KEY, name TEXT, description TEXT,"
       " creator TEXT, created TEXT, type TEXT, domains TEXT);"
       "CREATE INDEX IF NOT EXISTS workflows_created ON workflows(created);"
@@ -95,13 +95,40 @@ void SearchIndex::clear() {
     throw IoError(std::string("search index: ") + sqlite3_errmsg(impl_->db));
 }
 
-std::vector<std::string> SearchIndex::match(const std::vector<std::string>& words) {
+namespace {
+// Every word as a quoted prefix term: "w1"* AND "w2"*.
+std::string fts_expression(const std::vector<std::string>& words) {
   std::string expr;
   for (const auto& w : words) {
     std::string quoted;
     for (char c : w) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
     expr += (expr.empty() ? "" : " AND ") + ("\"" + quoted + "\"*");
   }
+  return expr;
+}
+}  // namespace
+
+std::vector<std::string> SearchIndex::match_page(const std::vector<std::string>& words,
+                                                 std::uint64_t offset, std::uint64_t limit,
+                                                 std::uint64_t& total) {
+  std::string expr = fts_expression(words);
+  std::lock_guard lock(impl_->mutex);
+  Stmt count(impl_->db, "SELECT count(*) FROM workflows_fts WHERE workflows_fts MATCH ?");
+  count.bind(1, expr);
+  total = count.row() ? static_cast<std::uint64_t>(sqlite3_column_int64(count.s, 0)) : 0;
+  Stmt q(impl_->db,
+         "SELECT id FROM workflows_fts WHERE workflows_fts MATCH ?"
+         " ORDER BY bm25(workflows_fts, 0.0, 3.0, 1.0), rowid DESC LIMIT ? OFFSET ?");
+  q.bind(1, expr);
+  sqlite3_bind_int64(q.s, 2, static_cast<sqlite3_int64>(limit));
+  sqlite3_bind_int64(q.s, 3, static_cast<sqlite3_int64>(offset));
+  std::vector<std::string> ids;
+  while (q.row()) ids.push_back(q.text(0));
+  return ids;
+}
+
+std::vector<std::string> SearchIndex::match(const std::vector<std::string>& words) {
+  std::string expr = fts_expression(words);
   std::lock_guard lock(impl_->mutex);
   // Ties in rank: the later row first (a workflow's row is rewritten when it is stored).
   Stmt q(impl_->db,

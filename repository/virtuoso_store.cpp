@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdlib>
 #include <limits>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -336,7 +337,7 @@ struct VirtuosoStore::Impl {
     if (r.status == 401 || r.status == 403)
       throw IoError("Virtuoso refused the " + what + " (HTTP " + std::to_string(r.status) +
                     "): check user and password of --store");
-    if (r.status >= 400 && r.status < 500 || r.body.find(" Error SP") != std::string::npos ||
+    if ((r.status >= 400 && r.status < 500) || r.body.find(" Error SP") != std::string::npos ||
         r.body.find("37000") != std::string::npos)
       throw ParseError({"query", std::nullopt, std::nullopt, std::nullopt},
                        "the Virtuoso backend cannot run this " + what + ": " + line);
@@ -390,6 +391,13 @@ QueryResult VirtuosoStore::query(const std::string& sparql, const QueryLimits& l
   if (lower(r.headers).find("x-sql-state: s1tat") != std::string::npos)
     throw QueryTimeout("the query ran past its time bound of " +
                        std::to_string(limits.timeout.count()) + " ms");
+  // Virtuoso cuts results at its ResultSetMaxRows and says so only in this header.
+  auto headers = lower(r.headers);
+  if (auto at = headers.find("x-sparql-maxrows:"); at != std::string::npos) {
+    std::uint64_t cap = std::strtoull(headers.c_str() + at + 17, nullptr, 10);
+    throw LimitExceeded("query result rows (Virtuoso's [SPARQL] ResultSetMaxRows cut the result)",
+                        cap, cap + 1);
+  }
   QueryResult out;
   if (graph) {
     out.kind = QueryResult::Kind::Graph;
