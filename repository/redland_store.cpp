@@ -11,6 +11,7 @@
 #include <mutex>
 #include <thread>
 #include <limits>
+#include <map>
 
 #include "mesh/errors.h"
 
@@ -155,6 +156,8 @@ struct RedlandStore::Impl {
   librdf_model* model = nullptr;
   sqlite3* reader = nullptr;         // the storage's file, read directly by subjects()
   sqlite3_stmt* subjects = nullptr;
+  // subjects()'s answers until the next write: exact, as this process alone writes the store.
+  std::map<std::pair<std::string, std::string>, std::vector<std::string>> subjects_memo;
   bool created = false;
   std::string last_log;  // the last message Redland logged (worker thread only)
 
@@ -257,6 +260,7 @@ struct RedlandStore::Impl {
   }
 
   void in_transaction(const std::function<void()>& body) {
+    subjects_memo.clear();
     bool tx = librdf_model_transaction_start(model) == 0;
     try {
       body();
@@ -373,6 +377,9 @@ QueryResult RedlandStore::query(const std::string& sparql, const QueryLimits& li
 std::vector<std::string> RedlandStore::subjects(const std::string& predicate,
                                                 const std::string& object) {
   return impl_->run([&] {
+    auto key = std::make_pair(predicate, object);
+    if (auto hit = impl_->subjects_memo.find(key); hit != impl_->subjects_memo.end())
+      return hit->second;
     std::vector<std::string> out;
     sqlite3_stmt* q = impl_->subjects;
     sqlite3_reset(q);
@@ -384,6 +391,8 @@ std::vector<std::string> RedlandStore::subjects(const std::string& predicate,
     sqlite3_reset(q);
     if (rc != SQLITE_DONE)
       throw IoError(std::string("cannot read the RDF store: ") + sqlite3_errmsg(impl_->reader));
+    if (impl_->subjects_memo.size() >= 256) impl_->subjects_memo.clear();
+    impl_->subjects_memo.emplace(key, out);
     return out;
   });
 }

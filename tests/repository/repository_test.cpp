@@ -133,6 +133,11 @@ TEST_F(RepositoryTest, CreateStoresAndDeleteRemovesEverything) {
   q.creator = "alice";
   EXPECT_TRUE(finds(q, id));
   EXPECT_TRUE(repo->remove(id));
+  EXPECT_FALSE(finds(q, id));  // no answer remembered from before the delete
+  NewWorkflow again = w;
+  auto id2 = repo->create(again);
+  EXPECT_TRUE(finds(q, id2));  // nor from before a create
+  EXPECT_TRUE(repo->remove(id2));
   EXPECT_FALSE(repo->get(id));
   EXPECT_FALSE(repo->xml(id));
   EXPECT_EQ(repo->store().size(), before);
