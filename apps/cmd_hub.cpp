@@ -24,6 +24,7 @@ struct HubArgs {
   bool allow_private_fetch = false;
   int max_loop = 100;
   std::string transfer = "smaller";
+  std::string store = "redland";
 };
 
 web::HubOptions hub_options(const HubArgs& args) {
@@ -56,7 +57,7 @@ struct HubRoutes {
   repository::Accounts accounts;
   web::Auth auth;
   HubRoutes(web::HubServer& hub, const HubArgs& args)
-      : repo(args.data), accounts(args.data, repo), auth(accounts) {
+      : repo(args.data, repository::StoreConfig::parse(args.store)), accounts(args.data, repo), auth(accounts) {
     web::add_account_routes(hub, auth);
     web::add_repository_routes(hub, repo, auth);
     hub.set_service_curator_check([this](const httplib::Request& req) { auth.require(req, "curator"); });
@@ -107,6 +108,9 @@ void add_common(CLI::App* cmd, HubArgs& args) {
   cmd->add_option("--port", args.port, "Port to listen on (0: any free port)");
   cmd->add_option("--host", args.host, "Address to listen on");
   cmd->add_option("--data", args.data, "Data directory");
+  cmd->add_option("--store", args.store,
+                  "RDF store: 'redland' (sqlite under --data) or "
+                  "'virtuoso=URL[,graph=URI][,user=U][,password=P]' (a Virtuoso SPARQL endpoint)");
   cmd->add_flag("--allow-private-fetch", args.allow_private_fetch,
                 "Let jobs fetch input_url from loopback and private addresses");
   cmd->add_option("--max-loop", args.max_loop, "Bound on the iterations of each while loop of a job")

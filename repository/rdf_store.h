@@ -1,14 +1,14 @@
 #pragma once
-// The RDF store: one Redland world, storage and model, owned by one worker thread that runs
-// every request from a queue (rasqal and the sqlite storage are not safe to share between
-// threads). SQLite storage under a folder, with the literal index of GROUND.md §1.
+// The RDF store behind the repository (DESIGN §7): one interface, two backends.
+// - Redland with the SQLite storage under the data folder (the default; redland_store.h).
+// - OpenLink Virtuoso reached over its SPARQL HTTP endpoint (virtuoso_store.h).
+// The repository's own queries use only what both answer the same way.
 
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
-#include <functional>
-#include <future>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -48,30 +48,41 @@ struct QueryResult {
 
 class RdfStore {
  public:
-  // Opens (creating when absent) the sqlite store DIR/store.db. \throws IoError.
-  explicit RdfStore(const std::filesystem::path& dir);
-  ~RdfStore();
-  RdfStore(const RdfStore&) = delete;
-  RdfStore& operator=(const RdfStore&) = delete;
+  virtual ~RdfStore() = default;
 
-  bool created_now() const;  // true when this open created the store
+  virtual std::string backend() const = 0;  // "redland" or "virtuoso"
+  virtual bool created_now() const = 0;     // true when this open found the store empty
 
   // SPARQL query. Graph results are serialized as `graph_format` ("turtle" or "rdfxml").
-  // \throws ParseError (syntax or a feature rasqal lacks), LimitExceeded (rows), QueryTimeout.
-  QueryResult query(const std::string& sparql, const QueryLimits& limits = {},
-                    const std::string& graph_format = "turtle");
-  // Parses an RDF/XML document into the store (one transaction). \throws ParseError.
-  void load_rdfxml(const std::string& text, const std::string& base_uri);
-  // Adds / removes triples in one transaction.
-  void add(const std::vector<Triple>& triples);
+  // \throws ParseError (syntax or a feature the backend lacks), LimitExceeded (rows),
+  // QueryTimeout, IoError (the backend cannot be reached).
+  virtual QueryResult query(const std::string& sparql, const QueryLimits& limits = {},
+                            const std::string& graph_format = "turtle") = 0;
+  // The subjects of the triples (?s predicate object), object a URI: one triple pattern, the
+  // search's filters of meaning. Redland answers it from the storage without rasqal.
+  virtual std::vector<std::string> subjects(const std::string& predicate,
+                                            const std::string& object) = 0;
+  // Parses an RDF/XML document into the store. \throws ParseError.
+  virtual void load_rdfxml(const std::string& text, const std::string& base_uri) = 0;
+  // Adds triples in one transaction (Redland) or one update request per batch (Virtuoso).
+  virtual void add(const std::vector<Triple>& triples) = 0;
   // Removes every triple whose subject is `subject`.
-  void remove_subject(const std::string& subject);
-  std::uint64_t size();
-
- private:
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
+  virtual void remove_subject(const std::string& subject) = 0;
+  virtual std::uint64_t size() = 0;
 };
+
+// Which backend: `redland` (the default) or `virtuoso=URL[,graph=URI][,user=U][,password=P]`
+// with URL the SPARQL endpoint (writes go to URL-auth, e.g. /sparql-auth, with digest auth).
+struct StoreConfig {
+  std::string virtuoso;  // the endpoint; empty: Redland + sqlite
+  std::string graph = "http://meshflow.org/graph/repository";
+  std::string user = "dba";
+  std::string password = "dba";
+  static StoreConfig parse(const std::string& spec);  // \throws InvalidInput
+};
+
+// Opens the store: Redland under `dir` (store.db), or the Virtuoso graph. \throws IoError.
+std::unique_ptr<RdfStore> open_store(const StoreConfig& config, const std::filesystem::path& dir);
 
 // A query ran past its time bound.
 class QueryTimeout : public std::runtime_error {

@@ -4,9 +4,11 @@
 #include <chrono>
 #include <ctime>
 #include <fstream>
+#include <functional>
 #include <random>
 #include <set>
 #include <sstream>
+#include <unordered_set>
 
 #include "engine/validate.h"
 #include "engine/workflow_parser.h"
@@ -64,6 +66,35 @@ std::vector<std::string> words(const std::string& q) {
   if (!cur.empty()) out.push_back(cur);
   if (out.size() > 8) out.resize(8);
   return out;
+}
+
+// The operation of the step a validation error points at: the step (or its parameter or
+// condition) starting last at or before the error's line.
+std::string operation_at(const engine::Workflow& workflow, std::uint64_t line) {
+  std::string best;
+  int best_line = 0;
+  auto consider = [&](const engine::Location& at, const std::string& operation) {
+    if (at.line > 0 && static_cast<std::uint64_t>(at.line) <= line && at.line >= best_line &&
+        !operation.empty()) {
+      best_line = at.line;
+      best = operation;
+    }
+  };
+  std::function<void(const engine::Body&)> walk = [&](const engine::Body& body) {
+    for (const auto& task : body) {
+      if (task.kind == engine::Task::Kind::Atomic) {
+        consider(task.at, task.name);
+        for (const auto& p : task.parameters) consider(p.at, task.name);
+      } else {
+        consider(task.at, task.condition.analysis);
+        consider(task.condition.at, task.condition.analysis);
+        walk(task.body);
+        walk(task.else_body);
+      }
+    }
+  };
+  walk(workflow.body);
+  return best;
 }
 
 struct Example {
@@ -185,7 +216,13 @@ struct Repository::Impl {
     if (w.type == "executable" || !w.xml.empty()) {
       if (w.xml.empty()) throw InvalidInput("an executable workflow needs its xml");
       auto parsed = engine::parse_workflow(w.xml, "workflow.xml");
-      engine::validate_workflow(parsed, "workflow.xml", services::operation_specs());
+      try {
+        engine::validate_workflow(parsed, "workflow.xml", services::operation_specs());
+      } catch (const ParseError& e) {
+        auto op = e.where().line ? operation_at(parsed, *e.where().line) : std::string();
+        if (op.empty()) throw;
+        throw StepError(e, op);
+      }
       ops = engine::operations_used(parsed);
     }
     for (const auto& op : ops)
@@ -229,11 +266,16 @@ struct Repository::Impl {
 
 };
 
-Repository::Repository(const std::filesystem::path& data_dir) : impl_(std::make_unique<Impl>()) {
+Repository::Repository(const std::filesystem::path& data_dir, const StoreConfig& config)
+    : impl_(std::make_unique<Impl>()) {
   impl_->dir = data_dir / "repository";
-  impl_->store = std::make_unique<RdfStore>(impl_->dir);
+  std::error_code ec;
+  std::filesystem::create_directories(impl_->dir, ec);
+  if (ec) throw IoError("cannot create " + impl_->dir.string() + ": " + ec.message());
+  impl_->store = open_store(config, impl_->dir);
   bool first = impl_->store->created_now();
   impl_->index = std::make_unique<SearchIndex>(impl_->dir / "search.sqlite");
+  if (first) impl_->index->clear();
   if (first) impl_->store->load_rdfxml(embedded::kOntology, "http://meshflow.org/ontology/wo");
   impl_->load_ontology_maps();
   if (first) {
@@ -317,36 +359,61 @@ SearchPage Repository::search(const SearchQuery& q) {
   else if (q.type == "executable") cls = "WorkflowExecutable";
   else if (!q.type.empty())
     throw InvalidInput("type must be static or executable, not \"" + q.type + "\"");
-  std::string where;
-  auto filter = [&](const std::string& value, const char* what, const std::string& pattern) {
+  // Each filter is one triple pattern (?w predicate object); the answer is their intersection.
+  std::vector<std::pair<std::string, std::string>> patterns;
+  auto filter = [&](const std::string& value, const char* what, const std::string& predicate,
+                    const std::string& object) {
     if (value.empty()) return;
     if (!is_identifier(value)) throw InvalidInput(std::string("bad ") + what + " \"" + value + "\"");
-    where += pattern + " .\n";
+    patterns.emplace_back(predicate, object);
   };
   if (!q.domain.empty() && !impl_->purpose_parent.count(q.domain))
     throw InvalidInput("unknown purpose \"" + q.domain + "\"");
-  filter(q.creator, "creator", "?w wo:creator <" + std::string(kUserBase) + q.creator + ">");
-  filter(q.operation, "operation", "?w wo:usesOperation wo:" + q.operation);
-  filter(q.domain, "domain", "?w wo:workflowDomain wo:" + q.domain);
-  filter(q.input, "input", "?w wo:inputType wo:" + q.input);
-  filter(q.output, "output", "?w wo:outputType wo:" + q.output);
-  filter(cls, "type", "?w a wo:" + cls);
-  std::optional<std::set<std::string>> allowed;
-  if (!where.empty()) {
-    auto r = impl_->store->query(kPrefixes + "SELECT ?w WHERE {\n" + where + "}");
-    allowed.emplace();
-    for (auto& row : r.rows) allowed->insert(local_name(row[0].value));
+  filter(q.creator, "creator", wo("creator"), std::string(kUserBase) + q.creator);
+  filter(q.operation, "operation", wo("usesOperation"), wo(q.operation));
+  filter(q.domain, "domain", wo("workflowDomain"), wo(q.domain));
+  filter(q.input, "input", wo("inputType"), wo(q.input));
+  filter(q.output, "output", wo("outputType"), wo(q.output));
+  filter(cls, "type", kRdfType, wo(cls));
+  std::optional<std::unordered_set<std::string>> allowed;
+  std::unordered_set<std::string> not_runnable;
+  if (q.runnable_with) {
+    if (q.type == "static") return {{}, 0, q.offset, std::min<std::uint64_t>(q.limit, 200)};
+    if (cls.empty()) patterns.emplace_back(kRdfType, wo("WorkflowExecutable"));
+    // The workflows using an operation no node offers (no NOT EXISTS on Redland: the complement).
+    std::string offered;
+    for (const auto& op : *q.runnable_with) {
+      if (!is_identifier(op)) throw InvalidInput("bad operation name \"" + op + "\"");
+      offered += std::string(offered.empty() ? "" : " && ") + "?o != wo:" + op;
+    }
+    auto r = impl_->store->query(kPrefixes + "SELECT DISTINCT ?w WHERE { ?w wo:usesOperation ?o" +
+                                 (offered.empty() ? "" : " . FILTER(" + offered + ")") + " }");
+    for (auto& row : r.rows) not_runnable.insert(local_name(row[0].value));
+  }
+  for (const auto& [predicate, object] : patterns) {
+    std::unordered_set<std::string> found;
+    for (auto& uri : impl_->store->subjects(predicate, object)) {
+      auto id = local_name(uri);
+      if (!allowed || allowed->count(id)) found.insert(std::move(id));
+    }
+    allowed = std::move(found);
+    if (allowed->empty()) break;
   }
   auto terms = words(q.q);
+  SearchPage page;
+  page.offset = q.offset;
+  page.limit = std::min<std::uint64_t>(q.limit, 200);
+  if (!allowed && not_runnable.empty() && !terms.empty()) {  // text alone: the index pages
+    for (auto& id : impl_->index->match_page(terms, q.offset, page.limit, page.total))
+      if (auto w = impl_->index->summary(id)) page.workflows.push_back(*w);
+    return page;
+  }
   std::vector<std::string> ordered = terms.empty() ? impl_->index->newest_first()
                                                    : impl_->index->match(terms);
   std::vector<std::string> hits;
   for (auto& id : ordered)
-    if (!allowed || allowed->count(id)) hits.push_back(std::move(id));
-  SearchPage page;
+    if ((!allowed || allowed->count(id)) && !not_runnable.count(id)) hits.push_back(std::move(id));
   page.total = hits.size();
-  page.offset = q.offset;
-  page.limit = std::min<std::uint64_t>(q.limit, 200);
   for (auto i = q.offset; i < hits.size() && i < q.offset + page.limit; ++i)
     if (auto w = impl_->index->summary(hits[i])) page.workflows.push_back(*w);
   return page;

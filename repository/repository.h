@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "mesh/errors.h"
 #include "repository/rdf_store.h"
 
 namespace meshflow::repository {
@@ -41,7 +42,20 @@ struct NewWorkflow {
 
 struct SearchQuery {
   std::string q, domain, input, output, operation, creator, type;
+  // Set: executable workflows only, every operation of which is in this set (runnable now).
+  std::optional<std::vector<std::string>> runnable_with;
   std::uint64_t offset = 0, limit = 20;
+};
+
+// A workflow step failed validation: the step's operation name beside line and column.
+class StepError : public ParseError {
+ public:
+  StepError(const ParseError& cause, std::string operation)
+      : ParseError(cause.where(), cause.reason()), operation_(std::move(operation)) {}
+  const std::string& operation() const { return operation_; }
+
+ private:
+  std::string operation_;
 };
 
 struct SearchPage {
@@ -59,13 +73,15 @@ const char* ontology_rdfxml();
 
 class Repository {
  public:
+  // Opens the store `store` says (Redland + sqlite under DATA/repository by default).
   // \throws IoError, ParseError (a broken ontology or example).
-  explicit Repository(const std::filesystem::path& data_dir);
+  explicit Repository(const std::filesystem::path& data_dir, const StoreConfig& store = {});
   ~Repository();
 
   RdfStore& store();
   // Validates (XSD + operations; names and purposes) and stores. Returns the id.
-  // \throws ParseError (XML, with line and column), InvalidInput.
+  // \throws StepError (a step: line, column, operation), ParseError (XML: line and column),
+  // InvalidInput.
   std::string create(const NewWorkflow& workflow);
   std::optional<WorkflowDetail> get(const std::string& id);
   std::optional<std::string> xml(const std::string& id);

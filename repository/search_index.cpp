@@ -37,13 +37,14 @@ struct Stmt {
 struct SearchIndex::Impl {
   sqlite3* db = nullptr;
   std::mutex mutex;
+  std::optional<std::vector<std::string>> newest;  // newest_first's answer until the next write
 };
 
 SearchIndex::SearchIndex(const std::filesystem::path& file) : impl_(std::make_unique<Impl>()) {
   if (sqlite3_open(file.string().c_str(), &impl_->db) != SQLITE_OK)
     throw IoError("cannot open " + file.string());
   const char* schema =
-      "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL;"
+      "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL; PRAGMA mmap_size=1073741824;"
       "CREATE TABLE IF NOT EXISTS workflows(id TEXT PRIMARY KEY, name TEXT, description TEXT,"
       " creator TEXT, created TEXT, type TEXT, domains TEXT);"
       "CREATE INDEX IF NOT EXISTS workflows_created ON workflows(created);"
@@ -56,6 +57,7 @@ SearchIndex::~SearchIndex() { sqlite3_close(impl_->db); }
 
 void SearchIndex::put(const WorkflowSummary& w) {
   std::lock_guard lock(impl_->mutex);
+  impl_->newest.reset();
   sqlite3_exec(impl_->db, "BEGIN", nullptr, nullptr, nullptr);
   try {
     Stmt(impl_->db, "DELETE FROM workflows_fts WHERE id = ?").bind(1, w.id).done(impl_->db);
@@ -74,6 +76,7 @@ void SearchIndex::put(const WorkflowSummary& w) {
 
 void SearchIndex::remove(const std::string& id) {
   std::lock_guard lock(impl_->mutex);
+  impl_->newest.reset();
   Stmt(impl_->db, "DELETE FROM workflows_fts WHERE id = ?").bind(1, id).done(impl_->db);
   Stmt(impl_->db, "DELETE FROM workflows WHERE id = ?").bind(1, id).done(impl_->db);
 }
@@ -84,17 +87,53 @@ bool SearchIndex::empty() {
   return !q.row();
 }
 
-std::vector<std::string> SearchIndex::match(const std::vector<std::string>& words) {
+void SearchIndex::clear() {
+  std::lock_guard lock(impl_->mutex);
+  impl_->newest.reset();
+  if (sqlite3_exec(impl_->db, "DELETE FROM workflows_fts; DELETE FROM workflows;", nullptr, nullptr,
+                   nullptr) != SQLITE_OK)
+    throw IoError(std::string("search index: ") + sqlite3_errmsg(impl_->db));
+}
+
+namespace {
+// Every word as a quoted prefix term: "w1"* AND "w2"*.
+std::string fts_expression(const std::vector<std::string>& words) {
   std::string expr;
   for (const auto& w : words) {
     std::string quoted;
     for (char c : w) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
     expr += (expr.empty() ? "" : " AND ") + ("\"" + quoted + "\"*");
   }
+  return expr;
+}
+}  // namespace
+
+std::vector<std::string> SearchIndex::match_page(const std::vector<std::string>& words,
+                                                 std::uint64_t offset, std::uint64_t limit,
+                                                 std::uint64_t& total) {
+  std::string expr = fts_expression(words);
   std::lock_guard lock(impl_->mutex);
+  Stmt count(impl_->db, "SELECT count(*) FROM workflows_fts WHERE workflows_fts MATCH ?");
+  count.bind(1, expr);
+  total = count.row() ? static_cast<std::uint64_t>(sqlite3_column_int64(count.s, 0)) : 0;
   Stmt q(impl_->db,
-         "SELECT workflows_fts.id FROM workflows_fts JOIN workflows ON workflows.id = workflows_fts.id"
-         " WHERE workflows_fts MATCH ? ORDER BY bm25(workflows_fts, 0.0, 3.0, 1.0), workflows.created DESC");
+         "SELECT id FROM workflows_fts WHERE workflows_fts MATCH ?"
+         " ORDER BY bm25(workflows_fts, 0.0, 3.0, 1.0), rowid DESC LIMIT ? OFFSET ?");
+  q.bind(1, expr);
+  sqlite3_bind_int64(q.s, 2, static_cast<sqlite3_int64>(limit));
+  sqlite3_bind_int64(q.s, 3, static_cast<sqlite3_int64>(offset));
+  std::vector<std::string> ids;
+  while (q.row()) ids.push_back(q.text(0));
+  return ids;
+}
+
+std::vector<std::string> SearchIndex::match(const std::vector<std::string>& words) {
+  std::string expr = fts_expression(words);
+  std::lock_guard lock(impl_->mutex);
+  // Ties in rank: the later row first (a workflow's row is rewritten when it is stored).
+  Stmt q(impl_->db,
+         "SELECT id FROM workflows_fts WHERE workflows_fts MATCH ?"
+         " ORDER BY bm25(workflows_fts, 0.0, 3.0, 1.0), rowid DESC");
   q.bind(1, expr);
   std::vector<std::string> ids;
   while (q.row()) ids.push_back(q.text(0));
@@ -103,10 +142,13 @@ std::vector<std::string> SearchIndex::match(const std::vector<std::string>& word
 
 std::vector<std::string> SearchIndex::newest_first() {
   std::lock_guard lock(impl_->mutex);
-  Stmt q(impl_->db, "SELECT id FROM workflows ORDER BY created DESC, id");
-  std::vector<std::string> ids;
-  while (q.row()) ids.push_back(q.text(0));
-  return ids;
+  if (!impl_->newest) {
+    Stmt q(impl_->db, "SELECT id FROM workflows ORDER BY created DESC, id");
+    std::vector<std::string> ids;
+    while (q.row()) ids.push_back(q.text(0));
+    impl_->newest = std::move(ids);
+  }
+  return *impl_->newest;
 }
 
 std::optional<WorkflowSummary> SearchIndex::summary(const std::string& id) {

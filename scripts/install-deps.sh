@@ -10,6 +10,7 @@ build="cmake ninja-build g++ pkg-config ccache libcli11-dev nlohmann-json3-dev z
   libxerces-c-dev librdf0-dev librdf-storage-sqlite libcpp-httplib-dev libcurl4-gnutls-dev
   libsodium-dev libgtest-dev libgmock-dev"
 test="$build clang libclang-rt-14-dev zstd python3 curl raptor2-utils rasqal-utils python3-sparqlwrapper python3-rdflib
+  virtuoso-opensource
   chromium nodejs"
 bench="$test iproute2 time meshlab xvfb xauth libopenmesh-apps libmeshoptimizer-dev libbenchmark-dev"
 

@@ -311,6 +311,9 @@ void HubServer::set_ready_condition(std::function<bool()> condition) {
 }
 bool HubServer::is_ready() const { return !impl_->ready_condition || impl_->ready_condition(); }
 std::size_t HubServer::registered_nodes() const { return impl_->services->list().size(); }
+std::vector<std::string> HubServer::offered_operations() const {
+  return impl_->services->offered_operations();
+}
 std::size_t HubServer::registrations_since_start() const { return impl_->registrations; }
 httplib::Server& HubServer::http() { return impl_->server; }
 void HubServer::set_service_curator_check(std::function<void(const httplib::Request&)> require) {

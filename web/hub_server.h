@@ -49,6 +49,7 @@ class HubServer {
   void set_ready_condition(std::function<bool()> condition);
   bool is_ready() const;
   std::size_t registered_nodes() const;
+  std::vector<std::string> offered_operations() const;  // by the registered nodes, now
   std::size_t registrations_since_start() const;  // node registrations since start()
   // Lets POST/DELETE /api/services by people too: `require` throws unless the request comes
   // from a curator (the accounts layer sets it); the node token is accepted as before.

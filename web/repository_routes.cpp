@@ -115,7 +115,19 @@ void add_repository_routes(HubServer& hub, repository::Repository& repo, Auth& a
     w.creator = who.name;
     if (w.type == "static" && repository::role_rank(who.role) < repository::role_rank("curator"))
       throw protocol::Forbidden("static (documentation) workflows are filed by curators");
-    auto id = repo.create(w);
+    std::string id;
+    try {
+      id = repo.create(w);
+    } catch (const repository::StepError& e) {
+      // The step's operation beside line and column, so that the builder marks the step.
+      json where = {{"file", e.where().file}, {"operation", e.operation()}};
+      if (e.where().line) where["line"] = *e.where().line;
+      if (e.where().column) where["column"] = *e.where().column;
+      res.status = 400;
+      res.set_content(json{{"error", e.what()}, {"operation", e.operation()}, {"where", where}}.dump(),
+                      "application/json");
+      return;
+    }
     auto d = repo.get(id);
     json out = summary_json(*d);
     out["operations"] = d->operations;
@@ -135,7 +147,7 @@ void add_repository_routes(HubServer& hub, repository::Repository& repo, Auth& a
                   repo.remove(w->id);
                   res.status = 204;
                 });
-  server.Get("/api/workflows", [&repo](const httplib::Request& req, httplib::Response& res) {
+  server.Get("/api/workflows", [&repo, &hub](const httplib::Request& req, httplib::Response& res) {
     repository::SearchQuery q;
     auto text = [&](const char* name) {
       return req.has_param(name) ? req.get_param_value(name) : std::string();
@@ -147,6 +159,10 @@ void add_repository_routes(HubServer& hub, repository::Repository& repo, Auth& a
     q.operation = text("operation");
     q.creator = text("creator");
     q.type = text("type");
+    std::string runnable = text("runnable");
+    if (runnable == "true" || runnable == "1") q.runnable_with = hub.offered_operations();
+    else if (!runnable.empty() && runnable != "false" && runnable != "0")
+      throw InvalidInput("runnable must be true or false, not \"" + runnable + "\"");
     q.offset = number_param(req, "offset", 0, 100000000);
     q.limit = number_param(req, "limit", 20, 200);
     if (q.q.size() > 1000) throw InvalidInput("q is longer than 1000 characters");

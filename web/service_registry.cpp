@@ -147,6 +147,12 @@ json ServiceRegistry::operations() const {
   return out;
 }
 
+std::vector<std::string> ServiceRegistry::offered_operations() const {
+  std::vector<std::string> names;
+  for (const auto& op : operations()) names.push_back(op.value("name", ""));
+  return names;
+}
+
 void ServiceRegistry::save() const {
   json out = json::array();
   for (const auto& s : services_)

@@ -49,6 +49,8 @@ class ServiceRegistry {
 
   // Every operation offered by some node (first description wins), for /api/operations.
   nlohmann::json operations() const;
+  // The names of the operations the registered nodes offer now (for runnable=true).
+  std::vector<std::string> offered_operations() const;
 
  private:
   void save() const;

@@ -103,8 +103,23 @@ try:
     code, _, body = http("GET", "/sparql?query=" + urllib.parse.quote(
         "SELECT * WHERE { ?a ?b ?c . ?d ?e ?f . ?g ?h ?i . ?j ?k ?l } LIMIT 100000000"))
     check(code in (413, 503), f"a query that runs too long is stopped (got {code}) {body[:100]}")
+    # Sorting a cross product computes all of it before the first row: only the deadline stops it,
+    # and the store is free at once for the next query.
+    code, _, body = http("GET", "/sparql?query=" + urllib.parse.quote(
+        "SELECT ?a WHERE { ?a ?b ?c . ?d ?e ?f . ?g ?h ?i } ORDER BY ?c ?f ?i LIMIT 1"))
+    check(code == 503, f"a runaway query -> 503 (got {code}) {body[:100]}")
+    started = time.monotonic()
+    code, _, body = http("GET", "/sparql?query=" + urllib.parse.quote("ASK { ?s ?p ?o }"))
+    took = time.monotonic() - started
+    check(code == 200 and took < 1.0, f"the next query answers within 1 s (took {took:.2f} s, {code})")
 
     # Search and the workflow routes.
+    code, _, body = http("GET", "/api/workflows?runnable=true")
+    check(code == 200 and json.loads(body)["total"] == 0, f"runnable=true with no node registered: none ({body[:100]})")
+    code, _, body = http("GET", "/api/workflows?runnable=false")
+    check(code == 200 and json.loads(body)["total"] == 4, f"runnable=false: all four ({body[:100]})")
+    code, _, _ = http("GET", "/api/workflows?runnable=maybe")
+    check(code == 400, f"runnable=maybe -> 400 (got {code})")
     code, _, body = http("GET", "/api/workflows?domain=Repair")
     names = [w["name"] for w in json.loads(body)["workflows"]]
     check(code == 200 and "Mesh Repairing" in names, f"domain=Repair finds Mesh Repairing: {names}")
@@ -173,6 +188,8 @@ try:
     code, _, body = http("POST", "/api/workflows", json.dumps(bad).encode(), dict(jh, **{"X-CSRF-Token": csrf}))
     where = json.loads(body).get("where", {})
     check(code == 400 and where.get("line") == 2, f"unknown operation -> 400 with line ({code} {body[:160]})")
+    check(where.get("operation") == "Frobnicate" and json.loads(body).get("operation") == "Frobnicate",
+          f"the error names the step's operation ({body[:160]})")
     bad = dict(wf, xml="<workflow><body>")
     code, _, body = http("POST", "/api/workflows", json.dumps(bad).encode(), dict(jh, **{"X-CSRF-Token": csrf}))
     check(code == 400 and "line" in json.loads(body).get("where", {}), f"malformed XML -> 400 with line ({code})")

@@ -1,7 +1,7 @@
 // meshflow's browser UI (DESIGN §8): one page, views chosen by the URL's #fragment.
 import { api, ApiError, session, loadSession, loggedIn, isCurator, postWithProgress } from './api.js';
 import { createViewer, parseMesh } from './viewer.js';
-import { OPERATORS, operatorsFor, atomicStep, blockStep, toXml, fromXml, drawFlow } from './workflow.js';
+import { OPERATORS, operatorsFor, atomicStep, blockStep, toXml, fromXml, drawFlow, stepOfError } from './workflow.js';
 
 const main = () => document.getElementById('main');
 const esc = (s) => String(s ?? '').replace(/&/g, '&amp;').replace(/</g, '&lt;').replace(/>/g, '&gt;').replace(/"/g, '&quot;');
@@ -416,7 +416,7 @@ async function builder() {
       toast('Saved');
       location.hash = `#/workflow/${encodeURIComponent(saved.id)}`;
     } catch (e) {
-      const stepId = e.where && e.where.line ? owner[e.where.line] : null;
+      const stepId = stepOfError(e.where, owner, state.steps);
       if (stepId) { state.errors[stepId] = e.message; render(); el.querySelector(`[data-step-id="${stepId}"] .step-error`)?.scrollIntoView(); }
       errorBox.textContent = `Not saved: ${errorText(e)}${e.where && e.where.line ? ` (XML line ${e.where.line}${e.where.column ? `, column ${e.where.column}` : ''})` : ''}`;
     }

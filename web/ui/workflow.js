@@ -47,6 +47,22 @@ export function toXml(steps) {
   return { xml: lines.join('\n') + '\n', owner };
 }
 
+// The step a hub validation error names: by the XML line (where.line, via toXml's owner), else
+// the first step using the operation the error names (where.operation); null when neither.
+export function stepOfError(where, owner, steps) {
+  if (!where) return null;
+  if (where.line && owner[where.line]) return owner[where.line];
+  if (!where.operation) return null;
+  const find = (list) => {
+    for (const s of list) {
+      if ((s.kind === 'atomic' ? s.name : s.cond.name) === where.operation) return s.id;
+      if (s.kind !== 'atomic') { const r = find(s.body) || find(s.else); if (r) return r; }
+    }
+    return null;
+  };
+  return find(steps);
+}
+
 // The steps of a workflow XML (for drawing it and opening it in the builder).
 export function fromXml(xml) {
   const doc = new DOMParser().parseFromString(xml, 'application/xml');
