@@ -257,10 +257,12 @@ struct NodeServer::Impl {
       task_done.notify_all();
     }).detach();
     std::unique_lock lock(tasks_mutex);
-    task_done.wait_for(lock, options.answer_within, [&] { return task->state != "running"; });
-    if (task->state == "running") {
+    // With answer_within 0 every run is a task, even one that has already finished.
+    const bool as_task = options.answer_within.count() == 0 ||
+                         !task_done.wait_for(lock, options.answer_within, [&] { return task->state != "running"; });
+    if (as_task) {
       res.status = 202;
-      res.set_content(json{{"task", url() + "/tasks/" + id}, {"state", "running"}}.dump(),
+      res.set_content(json{{"task", url() + "/tasks/" + id}, {"state", task->state}}.dump(),
                       "application/json");
       return;
     }
