@@ -3,10 +3,15 @@
 #include <algorithm>
 #include <cctype>
 #include <chrono>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <thread>
 
+#include "mesh/canonical_ply.h"
 #include "mesh/errors.h"
+#include "mesh/mesh_io.h"
+#include "parallel/distributed_simplify.h"
+#include "parallel/node_dispatch.h"
 #include "protocol/http_client.h"
 
 namespace meshflow::engine {
@@ -90,7 +95,8 @@ struct HttpNodeClient::Answer {
 
 HttpNodeClient::HttpNodeClient(HttpNodeOptions options, std::string input_url, std::string input_sha256)
     : options_(std::move(options)), input_url_(input_url), input_sha_(input_sha256),
-      current_url_(std::move(input_url)), current_sha_(std::move(input_sha256)) {}
+      current_url_(std::move(input_url)), current_sha_(std::move(input_sha256)),
+      current_vertices_(options_.input_vertices) {}
 
 HttpNodeClient::~HttpNodeClient() {
   stop_broadcast_ = true;  // a job that ends early does not wait for the last downloads
@@ -314,7 +320,85 @@ void HttpNodeClient::forward(const std::string& from_node, const std::string& ba
   }
 }
 
+std::vector<NodeCandidate> HttpNodeClient::nodes_too_small_for(const std::string& operation) const {
+  if (operation != "Simplify" || current_vertices_ == 0 || !options_.publish || options_.work_dir.empty() ||
+      !options_.candidates)
+    return {};
+  std::vector<NodeCandidate> nodes;
+  for (const NodeCandidate& c : options_.candidates(operation)) {
+    if (is_dead(c.url)) continue;
+    if (c.capacity_vertices == 0 || c.capacity_vertices >= current_vertices_) return {};  // one takes it whole
+    nodes.push_back(c);
+  }
+  return nodes;
+}
+
+StepReport HttpNodeClient::run_split(const std::vector<NodeCandidate>& nodes, const services::Params& params) {
+  auto started = Clock::now();
+  const services::OperationSpec& spec = services::find_operation("Simplify");
+  auto given = [&](const std::string& name) {
+    if (auto it = params.find(name); it != params.end()) return it->second;
+    for (const auto& p : spec.params)
+      if (p.name == name) return p.default_value;
+    return 0.0;
+  };
+  if (given("targetVertices") > 0)
+    throw InvalidInput("Simplify: a mesh larger than every node takes (" + std::to_string(current_vertices_) +
+                       " vertices) is simplified in parts, which stop at maxError, not at targetVertices");
+  if (!(options_.reference_diagonal > 0)) throw InvalidInput("Simplify in parts needs the input's diagonal");
+  std::string label = "parts on " + std::to_string(nodes.size()) + " nodes";
+  if (options_.on_start) options_.on_start("Simplify", label);
+  namespace fs = std::filesystem;
+  fs::path dir = fs::path(options_.work_dir) / ("split-" + std::to_string(++splits_));
+  fs::remove_all(dir);
+  fs::create_directories(dir / "parts");
+  const std::string in = (dir / "input.ply").string(), out = (dir / "output.ply").string();
+  protocol::HttpOptions http;
+  http.timeout = std::chrono::minutes(30);
+  protocol::DownloadResult got = protocol::http_download(current_url_, in, current_sha_, true, http);
+  if (!got.ok()) throw IoError("fetching the mesh to split from " + current_url_ + ": " + got.describe());
+
+  parallel::DistributedParams split;
+  split.max_error_abs = given("maxError") / 100.0 * options_.reference_diagonal;
+  split.parts_dir = (dir / "parts").string();
+  // Parts well inside the smallest node (the partition's sizes are estimates from a sample).
+  std::uint64_t smallest = nodes.front().capacity_vertices;
+  std::vector<std::string> urls;
+  for (const NodeCandidate& c : nodes) {
+    smallest = std::min(smallest, c.capacity_vertices);
+    urls.push_back(c.url);
+  }
+  split.vertices_per_part = std::max<std::uint64_t>(smallest / 2, 1000);
+  parallel::NodeDispatch dispatch(urls, split.parts_dir, options_.token);
+  split.workers = static_cast<unsigned>(dispatch.nodes());
+  split.runner = [&dispatch](std::size_t p, double max_error_abs) { return dispatch.run(p, max_error_abs); };
+  split.progress = options_.progress;
+  parallel::DistributedReport done = parallel::simplify_distributed(in, out, split);
+  fs::remove(in);
+  fs::remove_all(dir / "parts");
+
+  // Served like a node's outputs: canonical PLY, zstd (the SHA-256 is of the PLY).
+  mesh::Mesh result = mesh::read_mesh(out);
+  const std::string served = out + ".zst";
+  mesh::write_mesh(result, served);
+  fs::remove(out);
+  Answer answer{"", json{{"output", options_.publish(served)}, {"sha256", mesh::mesh_sha256(result)}}};
+  StepReport report;
+  report.operation = "Simplify";
+  report.node = label + " (" + std::to_string(done.partition.parts) + " parts)";
+  report.run_ms = std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - started).count();
+  report.output_bytes = fs::file_size(served);
+  forward("", current_sha_, answer, report);  // every later node fetches the whole output
+  current_url_ = answer.body["output"];
+  current_sha_ = answer.body["sha256"];
+  current_node_.clear();
+  current_vertices_ = result.num_vertices();
+  return report;
+}
+
 StepReport HttpNodeClient::run_atomic(const std::string& operation, const services::Params& params) {
+  if (std::vector<NodeCandidate> nodes = nodes_too_small_for(operation); !nodes.empty())
+    return run_split(nodes, params);
   json p = json::object();
   for (const auto& [k, v] : params) p[k] = v;
   std::string body = json{{"input", current_url_}, {"sha256", current_sha_}, {"params", p},
@@ -332,6 +416,9 @@ StepReport HttpNodeClient::run_atomic(const std::string& operation, const servic
   current_url_ = answer.body.value("output", "");
   current_sha_ = answer.body.value("sha256", "");
   current_node_ = answer.node;
+  current_vertices_ = 0;
+  if (auto stats = answer.body.find("stats"); stats != answer.body.end() && stats->is_object())
+    current_vertices_ = stats->value("NumberOfVertices", std::uint64_t{0});
   return report;
 }
 

@@ -45,6 +45,13 @@ struct HttpNodeOptions {
   std::function<bool()> cancelled;
   double reference_diagonal = 0;  // of the workflow's input
   TransferMode transfer = TransferMode::Smaller;
+  // Large meshes (DESIGN §9): a Simplify step whose mesh has more vertices than every node
+  // offering Simplify takes is split into parts simplified on those nodes (parallel/), here in
+  // `work_dir`, and its output is served by the hub at the URL `publish` gives for a file there.
+  std::uint64_t input_vertices = 0;  // of the workflow's input; 0: unknown (never split)
+  std::string work_dir;
+  std::function<std::string(const std::string& path)> publish;
+  std::function<void(const std::string& step, double fraction)> progress;  // of a split step
 };
 
 // The input broadcast (thesis Table 4.3's IB): the slowest download of the input by a node.
@@ -94,6 +101,9 @@ class HttpNodeClient : public NodeClient {
   bool is_dead(const std::string& node) const;
   void run_broadcast(std::vector<std::string> targets);
   void wait_until_told(const std::string& node);  // its input download has been asked for
+  // The Simplify nodes, when the current mesh is larger than each of them takes; else empty.
+  std::vector<NodeCandidate> nodes_too_small_for(const std::string& operation) const;
+  StepReport run_split(const std::vector<NodeCandidate>& nodes, const services::Params& params);
 
   HttpNodeOptions options_;
   std::string input_url_, input_sha_;
@@ -108,6 +118,8 @@ class HttpNodeClient : public NodeClient {
   std::map<std::string, std::string> plan_;  // operation -> node
   std::vector<std::string> later_;
   std::vector<std::string> dead_;
+  std::uint64_t current_vertices_ = 0;  // 0: unknown
+  int splits_ = 0;
 };
 
 }  // namespace meshflow::engine

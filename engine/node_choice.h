@@ -17,6 +17,7 @@ struct NodeCandidate {
   int active_steps = 0;       // steps the hub runs on it now (all jobs)
   int planned_steps = 0;      // operations of the job being planned already placed on it
   double bandwidth_mbps = 0;  // measured from real transfers into it; 0: not measured yet
+  std::uint64_t capacity_vertices = 0;  // the largest mesh it takes (/service.json); 0: not said
 };
 
 // \pre every candidate offers the operation. Returns nullopt when there is none.

@@ -150,14 +150,16 @@ void simplify_parts(const DistributedParams& params, DistributedReport& report) 
 }
 
 DistributedReport simplify_distributed(const std::string& in, const std::string& out, const DistributedParams& params) {
-  if (!(params.max_error_percent > 0)) throw InvalidInput("--max-error must be > 0 (% of the diagonal)");
+  if (!(params.max_error_percent > 0) && !(params.max_error_abs > 0))
+    throw InvalidInput("--max-error must be > 0 (% of the diagonal)");
   if (params.workers == 0) throw InvalidInput("--workers must be at least 1");
   if (params.parts_dir.empty()) throw InvalidInput("a parts directory is needed");
   DistributedReport report;
   std::function<void(double)> partition_progress;
   if (params.progress) partition_progress = [&](double f) { params.progress("partition", f); };
   report.partition = partition_file(in, params.vertices_per_part, params.parts_dir, partition_progress);
-  report.max_error_abs = params.max_error_percent / 100.0 * report.partition.diagonal;
+  report.max_error_abs = params.max_error_abs > 0 ? params.max_error_abs
+                                                  : params.max_error_percent / 100.0 * report.partition.diagonal;
   if (!(report.max_error_abs > 0)) throw InvalidInput(in + ": the mesh is flat to a point (zero diagonal)");
   report.independent_sets = independent_sets(report.partition.adjacency, params.workers);
   simplify_parts(params, report);

@@ -28,6 +28,7 @@ using PartRunner = std::function<services::PartStats(std::size_t p, double max_e
 
 struct DistributedParams {
   double max_error_percent = 0;  // of the input's diagonal, converted once here
+  double max_error_abs = 0;      // when > 0, used as is instead (a workflow's own reference)
   std::size_t vertices_per_part = 1000000;
   unsigned workers = 2;          // parts at once (the nodes' count when dispatching to nodes)
   std::string parts_dir;

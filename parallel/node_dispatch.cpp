@@ -36,13 +36,15 @@ struct NodeDispatch::Impl {
   std::string last_failure;
   std::mutex mutex;
   std::condition_variable freed;
-  std::string dir, base_url;
+  std::string dir, base_url, token;
   httplib::Server server;
   std::thread thread;
 };
 
-NodeDispatch::NodeDispatch(std::vector<std::string> node_urls, std::string parts_dir) : impl_(std::make_unique<Impl>()) {
+NodeDispatch::NodeDispatch(std::vector<std::string> node_urls, std::string parts_dir, std::string token)
+    : impl_(std::make_unique<Impl>()) {
   Impl& d = *impl_;
+  d.token = std::move(token);
   if (node_urls.empty()) throw InvalidInput("--nodes: give at least one node URL");
   bool loopback = true;
   for (auto& url : node_urls) {
@@ -86,11 +88,12 @@ struct NodeDown : std::runtime_error {
 };
 
 services::PartStats run_on(const std::string& node, const std::string& base_url, const std::string& dir, std::size_t p,
-                           double max_error_abs) {
+                           double max_error_abs, const std::string& token) {
   const std::string part_url = base_url + "/parts/part-" + std::to_string(p) + ".mfp";
   json request{{"vertices", part_url}, {"triangles", part_url}, {"removed", json::array()}, {"max_error_abs", max_error_abs}};
   protocol::HttpOptions http;
   http.timeout = std::chrono::minutes(60);
+  http.bearer_token = token;
   protocol::HttpResult r = protocol::http_request("POST", node + "/parts/simplify", request.dump(), http);
   if (r.status == 0) throw NodeDown(node + ": " + r.describe());
   json answer = json::parse(r.body, nullptr, false);
@@ -132,7 +135,7 @@ services::PartStats NodeDispatch::run(std::size_t p, double max_error_abs) {
       d.state[n] = Impl::kBusy;
     }
     try {
-      services::PartStats stats = run_on(d.nodes[n], d.base_url, d.dir, p, max_error_abs);
+      services::PartStats stats = run_on(d.nodes[n], d.base_url, d.dir, p, max_error_abs, d.token);
       std::lock_guard lock(d.mutex);
       d.state[n] = Impl::kFree;
       d.freed.notify_one();

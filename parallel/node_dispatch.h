@@ -21,7 +21,8 @@ class NodeDispatch {
   // Starts serving `parts_dir` (on loopback when every node is on loopback, else on every
   // interface, advertised by this host's name) and checks each node answers /service.json.
   // \throws InvalidInput naming an unreachable or malformed node URL.
-  NodeDispatch(std::vector<std::string> node_urls, std::string parts_dir);
+  // `token`: the node token, for nodes registered with a hub (their mutating routes need it).
+  NodeDispatch(std::vector<std::string> node_urls, std::string parts_dir, std::string token = {});
   ~NodeDispatch();
   // Part p on a free node; blocks until done. \throws on a node's error, with its answer.
   services::PartStats run(std::size_t p, double max_error_abs);

@@ -153,6 +153,9 @@ QueryResult parse_sparql_json(const std::string& body, std::uint64_t max_rows) {
   } catch (const json::parse_error& e) {
     throw ParseError({"SPARQL JSON results", std::nullopt, std::nullopt, e.byte},
                      std::string("not JSON: ") + e.what());
+  } catch (const json::exception& e) {  // e.g. a number out of range (found by fuzz_sparql_results)
+    throw ParseError({"SPARQL JSON results", std::nullopt, std::nullopt, std::nullopt},
+                     std::string("not JSON we can read: ") + e.what());
   }
   if (!j.is_object()) throw bad("the results are not a JSON object");
   QueryResult out;

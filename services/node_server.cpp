@@ -127,6 +127,22 @@ struct NodeServer::Impl {
       throw protocol::Forbidden("refusing to fetch from " + origin +
                                 ": not the hub or a registered node");
   }
+  // Part files (POST /parts/simplify) come from the coordinator of a split Simplify step: the
+  // hub itself, serving them on a port of its own, so the hub's host at any port is allowed too.
+  void check_part_origin(const std::string& part_url) {
+    if (!options.hub_url.empty() &&
+        host_of(protocol::url_origin(part_url)) == host_of(protocol::url_origin(options.hub_url)))
+      return;
+    check_fetch_origin(part_url);
+  }
+  // "http://h:1" -> "h", "http://[::1]:1" -> "[::1]"
+  static std::string host_of(const std::string& origin) {
+    auto start = origin.find("://");
+    std::string host = start == std::string::npos ? origin : origin.substr(start + 3);
+    auto colon = host.rfind(':');
+    if (colon != std::string::npos && host.find(']', colon) == std::string::npos) host.resize(colon);
+    return host;
+  }
   std::mutex origins_mutex;
   std::set<std::string> origins;
   std::set<std::string> allowed_origins() {
@@ -285,7 +301,7 @@ struct NodeServer::Impl {
     auto e = body.find("max_error_abs");
     if (e == body.end() || !e->is_number() || !(e->get<double>() > 0))
       throw InvalidInput("'max_error_abs' must be a number > 0");
-    check_fetch_origin(part_url);
+    check_part_origin(part_url);
     const auto incoming = cache->files_dir() / ("incoming-" + std::to_string(next_incoming++) + ".mfp");
     protocol::DownloadResult got = protocol::http_download(part_url, incoming.string());
     if (!got.ok()) throw IoError("cannot fetch the part " + part_url + ": " + got.describe());

@@ -35,7 +35,7 @@ json body_json(const httplib::Request& req) {
     auto j = json::parse(req.body);
     if (!j.is_object()) throw InvalidInput("the body must be a JSON object");
     return j;
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // syntax, or a number out of range
     throw InvalidInput(std::string("the body is not JSON: ") + e.what());
   }
 }

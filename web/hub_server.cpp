@@ -226,6 +226,13 @@ struct HubServer::Impl {
     server.Get(R"(/api/jobs/([0-9a-f]+)/input)", [this](const httplib::Request& req, httplib::Response& res) {
       protocol::serve_file(req, res, jobs->input_file(req.matches[1]).string(), "application/zstd");
     });
+    // The output of a Simplify step run in parts (engine/http_node_client.h), for later nodes.
+    server.Get(R"(/api/jobs/([0-9a-f]+)/split/(split-[0-9]+)/output\.ply\.zst)",
+               [this](const httplib::Request& req, httplib::Response& res) {
+                 auto file = jobs->job_dir(req.matches[1]) / "split" / std::string(req.matches[2]) / "output.ply.zst";
+                 if (!std::filesystem::exists(file)) throw protocol::NotFound("no such split output");
+                 protocol::serve_file(req, res, file.string(), "application/zstd");
+               });
     server.Get(R"(/api/jobs/([0-9a-f]+)/output)", [this](const httplib::Request& req, httplib::Response& res) {
       auto status = jobs->status(req.matches[1]);
       if (!status) throw protocol::NotFound("no job " + std::string(req.matches[1]));

@@ -237,6 +237,24 @@ void JobManager::run(const std::string& id) {
     };
     mesh::Mesh input = mesh::read_mesh(job->input_path);
     options.reference_diagonal = mesh::bounding_box(input).diagonal();
+    // A Simplify step too large for every node runs in parts; its output is served from here.
+    options.input_vertices = input.num_vertices();
+    options.work_dir = (job_dir(id) / "split").string();
+    options.publish = [this, id](const std::string& path) {
+      std::string relative = std::filesystem::relative(path, job_dir(id) / "split").generic_string();
+      return hub_url_ + "/api/jobs/" + id + "/split/" + relative;
+    };
+    int last_percent = -1;
+    std::mutex progress_mutex;  // the parts report from their dispatch threads
+    options.progress = [&](const std::string& step, double fraction) {
+      std::lock_guard lock(progress_mutex);
+      int percent = static_cast<int>(fraction * 100);
+      if (!running || percent / 5 == last_percent / 5) return;
+      last_percent = percent;
+      engine::StepRecord now = *running;
+      now.node = running->node + " - " + step + " " + std::to_string(percent) + "%";
+      journal_.put_step(id, now);
+    };
     std::string input_url = hub_url_ + "/api/jobs/" + id + "/input";
     engine::HttpNodeClient live(options, input_url, job->input_sha256);
     live.plan(engine::operations_used(workflow));

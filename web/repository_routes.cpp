@@ -86,7 +86,7 @@ void add_repository_routes(HubServer& hub, repository::Repository& repo, Auth& a
     json j;
     try {
       j = json::parse(req.body);
-    } catch (const json::parse_error& e) {
+    } catch (const json::exception& e) {  // syntax, or a number out of range
       throw InvalidInput(std::string("the body is not JSON: ") + e.what());
     }
     if (!j.is_object()) throw InvalidInput("the body must be a JSON object");

@@ -101,7 +101,10 @@ std::vector<engine::NodeCandidate> ServiceRegistry::candidates(const std::string
   std::vector<engine::NodeCandidate> out;
   for (const auto& s : services_)
     if (s.offers(operation))
-      out.push_back({.url = s.url, .active_steps = s.active_steps, .bandwidth_mbps = s.bandwidth_mbps});
+      out.push_back({.url = s.url,
+                     .active_steps = s.active_steps,
+                     .bandwidth_mbps = s.bandwidth_mbps,
+                     .capacity_vertices = s.capacity_vertices});
   return out;
 }
 

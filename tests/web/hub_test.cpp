@@ -139,6 +139,42 @@ TEST(Hub, AStepOnADeadNodeRunsAgainOnAnother) {
   for (const auto& step : job["steps"]) EXPECT_EQ(step["node"], b_url) << job.dump();
 }
 
+// DESIGN §9 inside a workflow: the bunny (35,947 vertices) is larger than either node takes
+// (20,000), so its Simplify runs in parts on both nodes, and the next step gets the merged mesh.
+// (The analysis step of the bunny: 35,947 vertices, 5 boundary loops, 1 component.)
+TEST(Hub, ASimplifyLargerThanEveryNodeRunsInPartsOnTheNodes) {
+  TempDir dir;
+  ChildProcess hub_process({MESHFLOW_BINARY, "hub", "--port", "0", "--data", dir.file("hub")});
+  std::string hub = hub_process.ready_url();
+  ASSERT_FALSE(hub.empty());
+  std::string token = dir.file("hub") + "/node.token";
+  ChildProcess a({MESHFLOW_BINARY, "node", "--hub", hub, "--token-file", token, "--data", dir.file("a"),
+                  "--capacity", "20000"});
+  ChildProcess b({MESHFLOW_BINARY, "node", "--hub", hub, "--token-file", token, "--data", dir.file("b"),
+                  "--capacity", "20000"});
+  ASSERT_FALSE(a.ready_url().empty());
+  ASSERT_FALSE(b.ready_url().empty());
+  const char* xml = "<workflow><body><atomic><name>Simplify</name><parameters><parameter>0.2</parameter>"
+                    "</parameters></atomic><atomic><name>RemoveDegenerateTriangles</name></atomic></body></workflow>";
+  const std::string input = shared_meshes() + "/real/stanford-bunny.obj";
+  std::string id = submit(hub, dir, xml, input);
+  json job = wait_for(hub, id);
+  ASSERT_EQ(job["state"], "done") << job.dump();
+  ASSERT_EQ(job["steps"].size(), 2u) << job.dump();
+  EXPECT_NE(job["steps"][0]["node"].get<std::string>().find("parts on 2 nodes"), std::string::npos) << job.dump();
+  auto got = protocol::http_download(hub + "/api/jobs/" + id + "/output", dir.file("out.ply"));
+  ASSERT_TRUE(got.ok()) << got.describe();
+  mesh::Mesh in = mesh::read_mesh(input), out = mesh::read_mesh(dir.file("out.ply"));
+  auto before = mesh::compute_measures(in), after = mesh::compute_measures(out);
+  EXPECT_LT(after.vertices, before.vertices / 2);
+  EXPECT_GT(after.vertices, 500u);
+  // The next step ran on a node, which fetched the merged mesh from the hub.
+  EXPECT_EQ(job["steps"][1]["node"].get<std::string>().rfind("http://", 0), 0u) << job.dump();
+  // No cracks: the parts' seams match, so the boundary and the pieces are those of the input.
+  EXPECT_EQ(after.boundary_loops, before.boundary_loops);
+  EXPECT_EQ(after.components, before.components);
+}
+
 TEST(Hub, ARestartedHubGoesOnFromTheLastFinishedStep) {
   TempDir dir;
   auto hub_process = std::make_unique<ChildProcess>(
