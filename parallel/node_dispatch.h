@@ -5,8 +5,8 @@
 // /files, which the coordinator downloads into the parts directory. One part per node at a
 // time; a long run answers 202 and is polled at its task URL. A node that stops answering is
 // dropped and its part goes to another node.
-// Nodes started with --hub fetch only from the hub and registered nodes, so they refuse the
-// coordinator's URL: use standalone nodes (`meshflow node` without --hub) for now.
+// Nodes started with --hub take part files only from the hub's host (the engine's split steps
+// run inside the hub), the hub and registered nodes; pass their token.
 
 #include <memory>
 #include <string>
