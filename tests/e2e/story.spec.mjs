@@ -182,7 +182,9 @@ test('sign up, save Mesh Repairing, find it by purpose, run it, my workflows', {
   await buildMeshRepairing(page);
   await page.getByLabel('Hole filling').check();
   await page.getByRole('button', { name: 'Save' }).click();
-  await page.waitForURL(/#\/workflow\//);
+  await page.waitForURL(/#\/workflow\//, { timeout: 90000 }).catch(async (e) => {
+    throw new Error(`the save did not open the workflow; the page says: ${await page.locator('#b-error').textContent()}`, { cause: e });
+  });
   await page.waitForSelector('.flow .block.while');
   await shot(page, 'workflow');
   await page.goto(`${hub.url}/#/search?domain=HoleFilling`);
