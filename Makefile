@@ -43,6 +43,8 @@ fuzz: deps
 	  $(BUILD)/meshflow partition ../shared/data/meshes/defects/triangular_hole.off --vertices-per-part 1000 \
 	    --parts-dir $(FUZZ_BUILD)/tests/fuzz/corpus-work/part >/dev/null 2>&1 || true; \
 	fi
+	@# Regression: an empty part with its quadric flag set (once crashed fuzz_part's round trip).
+	@printf 'MFPART1\n%016d\001' 0 | tr 0 '\000' > $(FUZZ_BUILD)/tests/fuzz/corpus-work/part/regression-empty-quadric-flag
 	tests/fuzz/run.sh $(FUZZ_BUILD)/tests/fuzz $(FUZZ_SECONDS)
 
 up: build

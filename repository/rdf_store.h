@@ -84,6 +84,10 @@ struct StoreConfig {
 // Opens the store: Redland under `dir` (store.db), or the Virtuoso graph. \throws IoError.
 std::unique_ptr<RdfStore> open_store(const StoreConfig& config, const std::filesystem::path& dir);
 
+// The first keyword of a SPARQL request after its prologue (comments, PREFIX and BASE
+// declarations), lower-cased: "select", "insert", ...; "" when there is none.
+std::string sparql_first_keyword(const std::string& text);
+
 // A query ran past its time bound.
 class QueryTimeout : public std::runtime_error {
  public:

@@ -117,30 +117,10 @@ void on_log(void* user, raptor_log_message* message) {
 }  // namespace
 
 std::string query_form(const std::string& text) {
-  std::size_t i = 0, n = text.size();
-  auto skip_space = [&] {
-    while (i < n) {
-      if (std::isspace(static_cast<unsigned char>(text[i]))) ++i;
-      else if (text[i] == '#') { while (i < n && text[i] != '\n') ++i; }
-      else break;
-    }
-  };
-  for (;;) {
-    skip_space();
-    std::size_t b = i;
-    while (i < n && std::isalpha(static_cast<unsigned char>(text[i]))) ++i;
-    std::string word = lower(text.substr(b, i - b));
-    if (word == "prefix" || word == "base") {
-      skip_space();
-      if (word == "prefix") { while (i < n && text[i] != '<') ++i; }
-      while (i < n && text[i] != '>') ++i;
-      if (i < n) ++i;
-      continue;
-    }
-    for (const char* form : {"select", "ask", "construct", "describe"})
-      if (word == form) return word;
-    return "";
-  }
+  std::string word = sparql_first_keyword(text);
+  for (const char* form : {"select", "ask", "construct", "describe"})
+    if (word == form) return word;
+  return "";
 }
 
 QueryResult parse_sparql_json(const std::string& body, std::uint64_t max_rows) {

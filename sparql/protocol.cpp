@@ -235,32 +235,10 @@ std::string write_results(const QueryResult& r, Format format) {
 }
 
 bool is_update(const std::string& text) {
-  // Skip comments, PREFIX/BASE declarations with their names and IRIs; look at the next word.
-  std::size_t i = 0, n = text.size();
-  auto skip_space = [&] {
-    while (i < n) {
-      if (std::isspace(static_cast<unsigned char>(text[i]))) ++i;
-      else if (text[i] == '#') { while (i < n && text[i] != '\n') ++i; }
-      else break;
-    }
-  };
-  for (;;) {
-    skip_space();
-    std::size_t b = i;
-    while (i < n && std::isalpha(static_cast<unsigned char>(text[i]))) ++i;
-    std::string word = lower(text.substr(b, i - b));
-    if (word == "prefix" || word == "base") {
-      skip_space();
-      if (word == "prefix") { while (i < n && text[i] != '<') ++i; }
-      while (i < n && text[i] != '>') ++i;
-      if (i < n) ++i;
-      continue;
-    }
-    static const char* updates[] = {"insert", "delete", "load", "clear", "drop", "create",
-                                    "add", "move", "copy", "with"};
-    return std::any_of(std::begin(updates), std::end(updates),
-                       [&](const char* u) { return word == u; });
-  }
+  static const char* updates[] = {"insert", "delete", "load", "clear", "drop", "create",
+                                  "add", "move", "copy", "with"};
+  std::string word = repository::sparql_first_keyword(text);
+  return std::any_of(std::begin(updates), std::end(updates), [&](const char* u) { return word == u; });
 }
 
 }  // namespace meshflow::sparql
