@@ -13,6 +13,7 @@
 #include "mesh/mesh_io.h"
 #include "mesh/part_files.h"
 #include "parallel/bsp_partition.h"
+#include "parallel/gid_index.h"
 #include "parallel/scratch_files.h"
 
 namespace meshflow::parallel {
@@ -135,18 +136,20 @@ class CountSink : public mesh::MeshSink {
   std::int64_t declared = -1;
 };
 
-std::size_t find_vertex(const std::vector<VertexRecord>& vs, std::uint32_t gid) {
-  auto it = std::lower_bound(vs.begin(), vs.end(), gid, [](const VertexRecord& r, std::uint32_t g) { return r.gid < g; });
-  return (it != vs.end() && it->gid == gid) ? static_cast<std::size_t>(it - vs.begin()) : vs.size();
+// A cell's own vertices (ascending global ids: written in input order) indexed by global id.
+GidIndex index_of(const std::vector<VertexRecord>& own) {
+  std::vector<std::uint32_t> gids(own.size());
+  for (std::size_t i = 0; i < own.size(); ++i) gids[i] = own[i].gid;
+  return GidIndex(std::move(gids));
 }
 
 // Which of a cell's own vertices its own triangles use.
-std::vector<std::uint8_t> referenced(const std::vector<VertexRecord>& own, const std::vector<TriangleRecord>& tris) {
-  std::vector<std::uint8_t> used(own.size(), 0);
+std::vector<std::uint8_t> referenced(const GidIndex& own, std::size_t count, const std::vector<TriangleRecord>& tris) {
+  std::vector<std::uint8_t> used(count, 0);
   for (const auto& t : tris)
     for (std::uint32_t g : t.v) {
-      std::size_t i = find_vertex(own, g);
-      if (i < own.size()) used[i] = 1;
+      std::size_t i = own.find(g);
+      if (i != GidIndex::npos) used[i] = 1;
     }
   return used;
 }
@@ -200,15 +203,16 @@ PartitionInfo partition_file(const std::string& input, std::size_t vertices_per_
       auto requests = load_records<RequestRecord>(scratch + "/R-" + std::to_string(c) + ".bin");
       if (requests.empty()) continue;
       auto own = load_records<VertexRecord>(scratch + "/V-" + std::to_string(c) + ".bin");
-      auto used = referenced(own, load_records<TriangleRecord>(scratch + "/T-" + std::to_string(c) + ".bin"));
+      const GidIndex own_index = index_of(own);
+      auto used = referenced(own_index, own.size(), load_records<TriangleRecord>(scratch + "/T-" + std::to_string(c) + ".bin"));
       std::sort(requests.begin(), requests.end());
       requests.erase(std::unique(requests.begin(), requests.end()), requests.end());
       std::vector<std::uint32_t> users;
       for (std::size_t i = 0; i < requests.size();) {
         std::size_t j = i;
         while (j < requests.size() && requests[j].gid == requests[i].gid) ++j;
-        std::size_t at = find_vertex(own, requests[i].gid);
-        if (at == own.size()) throw std::logic_error("partition: a requested vertex is not in its cell's file");
+        std::size_t at = own_index.find(requests[i].gid);
+        if (at == GidIndex::npos) throw std::logic_error("partition: a requested vertex is not in its cell's file");
         users.clear();
         if (used[at]) users.push_back(part_of_cell[c]);
         for (std::size_t k = i; k < j; ++k) users.push_back(part_of_cell[requests[k].from]);
@@ -236,9 +240,14 @@ PartitionInfo partition_file(const std::string& input, std::size_t vertices_per_
     if (part_of_cell[c] != ~0u) {
       auto own = load_records<VertexRecord>(scratch + "/V-" + id);
       auto tris = load_records<TriangleRecord>(scratch + "/T-" + id);
-      auto used = referenced(own, tris);
+      const GidIndex own_index = index_of(own);
+      auto used = referenced(own_index, own.size(), tris);
       std::vector<std::uint8_t> requested(own.size(), 0);
-      for (const auto& r : load_records<RequestRecord>(scratch + "/R-" + id)) requested[find_vertex(own, r.gid)] = 1;
+      for (const auto& r : load_records<RequestRecord>(scratch + "/R-" + id)) {
+        std::size_t at = own_index.find(r.gid);
+        if (at == GidIndex::npos) throw std::logic_error("partition: a requested vertex is not in its cell's file");
+        requested[at] = 1;
+      }
       auto copies = load_records<CopyRecord>(scratch + "/F-" + id);
       std::sort(copies.begin(), copies.end(), [](const CopyRecord& a, const CopyRecord& b) { return a.gid < b.gid; });
       mesh::PartFile part;
@@ -260,14 +269,12 @@ PartitionInfo partition_file(const std::string& input, std::size_t vertices_per_
           ++k;
         }
       }
+      // Every corner is an own vertex or a copy, and the ids came from 32-bit records.
+      const GidIndex local_of(std::vector<std::uint32_t>(part.global_ids.begin(), part.global_ids.end()));
       part.triangles.reserve(tris.size());
-      for (const auto& t : tris) {
-        mesh::Triangle local;
-        for (int k2 = 0; k2 < 3; ++k2)
-          local[k2] = static_cast<mesh::Index>(std::lower_bound(part.global_ids.begin(), part.global_ids.end(), t.v[k2]) -
-                                               part.global_ids.begin());
-        part.triangles.push_back(local);
-      }
+      for (const auto& t : tris)
+        part.triangles.push_back({static_cast<mesh::Index>(local_of.find(t.v[0])), static_cast<mesh::Index>(local_of.find(t.v[1])),
+                                  static_cast<mesh::Index>(local_of.find(t.v[2]))});
       mesh::write_part(part, part_path(dir, part_of_cell[c], false));
     }
     for (const char* kind : {"V-", "T-", "R-", "F-"}) std::filesystem::remove(scratch + "/" + kind + id);

@@ -1,7 +1,9 @@
 #include "services/simplify.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "mesh/errors.h"
@@ -204,6 +206,7 @@ class Simplifier {
         if ((*params_.locked)[v]) lock_[v] = true;
     alive_.assign(V, false);
     for (std::size_t v = 0; v < V; ++v) alive_[v] = !vt_.empty(static_cast<Index>(v));
+    version_.assign(V, 0);
     if (params_.quadrics) {
       for (std::size_t v = 0; v < V && v < params_.quadrics->size(); ++v) quadric_[v] = from_array((*params_.quadrics)[v]);
     } else for (std::size_t t = 0; t < tris_.size(); ++t) {
@@ -224,22 +227,22 @@ class Simplifier {
   }
 
   SimplifyResult run() {
-    // Edges are about 1.5 x triangles; compact() keeps the heap under 1.25 x its live size, so
+    // Edges are about 1.5 x triangles; compact() keeps the heap under 1.125 x its live size, so
     // this one allocation holds it to the end.
-    heap_.reserve(tris_.size() * 15 / 8 + 1024);
+    heap_.reserve(tris_.size() * 27 / 16 + 1024);
     for (std::size_t v = 0; v < pos_.size(); ++v)
       if (alive_[v]) push_edges_of(static_cast<Index>(v), /*only_greater=*/true);
     heap_.heapify();
-    compact_at_ = std::max<std::size_t>(heap_.size() * 5 / 4, 1024);
+    compact_at_ = std::max<std::size_t>(heap_.size() * 9 / 8, 1024);
     SimplifyResult result;
     std::size_t start_vertices = live_vertices_;
     while (!heap_.empty()) {
       if (params_.target_vertices && live_vertices_ <= params_.target_vertices) break;
       Candidate c = heap_.pop();
-      if (!alive_[c.keep] || !alive_[c.drop]) continue;
+      if (stale(c)) continue;  // an end changed since, and the edge was pushed again with its new cost
       Placement place;
-      if (!evaluate(c.keep, c.drop, place) || place.keep != c.keep || rank_of(place) != c.cost)
-        continue;  // stale: an end changed since, and the edge was pushed again with its new cost
+      if (!evaluate(c.keep, c.drop, place) || place.keep != c.keep || (key_of(place) ^ c.key) > 0xff)
+        continue;  // looked current only because the 8-bit versions wrapped
       if (params_.max_error > 0 && place.rms > params_.max_error) break;  // ranked by rms in this mode
       if (!collapse(c.keep, c.drop, place.position)) continue;
       result.collapses++;
@@ -261,28 +264,36 @@ class Simplifier {
     Index keep = 0, drop = 0;
     Vec position{};
   };
-  // A collapse in the heap, 12 bytes (the heap's cache misses are most of the time). Lazy
-  // deletion: when an end changes, its edges are pushed again with their new cost, and an entry
-  // whose cost no longer matches a fresh evaluation is dropped when it surfaces. The position is
-  // recomputed then too.
+  // A collapse in the heap, 12 bytes (the heap's cache misses are most of the time). The key
+  // orders the heap: the cost's float in the top 24 bits (non-negative floats order like their
+  // bits; 15 bits of mantissa are left), then the sum of the ends' 8-bit versions at push time.
+  // Lazy deletion: a collapse changes only the kept vertex (position, quadric, boundary flag),
+  // kills the dropped one and pushes the kept vertex's edges again with a new version, so an
+  // entry whose version sum no longer matches is stale. The versions wrap; the rare entry that
+  // looks current after 256 changes is caught when it surfaces by a fresh evaluation.
   struct Candidate {
-    float cost;  // rank_of(): rms with a max error, else the quadric error
+    std::uint32_t key;
     Index keep, drop;
   };
   struct Cheaper {
-    bool operator()(const Candidate& a, const Candidate& b) const { return a.cost < b.cost; }
+    bool operator()(const Candidate& a, const Candidate& b) const { return a.key < b.key; }
   };
-  float rank_of(const Placement& p) const { return static_cast<float>(params_.max_error > 0 ? p.rms : p.cost); }
+  // rms with a max error, else the quadric error
+  static std::uint32_t cost_bits(const Placement& p, bool by_rms) {
+    return std::bit_cast<std::uint32_t>(static_cast<float>(by_rms ? p.rms : p.cost)) & ~std::uint32_t{0xff};
+  }
+  std::uint32_t key_of(const Placement& p) const {
+    return cost_bits(p, params_.max_error > 0) | version_sum(p.keep, p.drop);
+  }
+  std::uint8_t version_sum(Index a, Index b) const { return static_cast<std::uint8_t>(version_[a] + version_[b]); }
 
   bool stale(const Candidate& c) const {
-    if (!alive_[c.keep] || !alive_[c.drop]) return true;
-    Placement p;
-    return !evaluate(c.keep, c.drop, p) || p.keep != c.keep || rank_of(p) != c.cost;
+    return !alive_[c.keep] || !alive_[c.drop] || (c.key & 0xff) != version_sum(c.keep, c.drop);
   }
   // Drops the stale candidates so that the heap stays proportional to the live edges.
   void compact() {
     heap_.remove_if([&](const Candidate& c) { return stale(c); });
-    compact_at_ = std::max<std::size_t>(heap_.size() * 5 / 4, 1024);
+    compact_at_ = std::max<std::size_t>(heap_.size() * 9 / 8, 1024);
   }
 
   // Boundary edges (one triangle) get a constraint plane; vertices on non-manifold edges (3+
@@ -436,8 +447,9 @@ class Simplifier {
   void push_candidate(Index a, Index b, bool keep_heap_order) {
     Placement p;
     if (!evaluate(a, b, p)) return;
-    if (keep_heap_order) heap_.push({rank_of(p), p.keep, p.drop});
-    else heap_.append({rank_of(p), p.keep, p.drop});
+    const Candidate c{key_of(p), p.keep, p.drop};
+    if (keep_heap_order) heap_.push(c);
+    else heap_.append(c);
   }
 
   bool collapse(Index keep, Index drop, const Vec& position) {
@@ -486,6 +498,7 @@ class Simplifier {
     vt_.move_all(drop, keep, tris_);
     alive_[drop] = false;
     live_vertices_--;
+    version_[keep]++;
     pos_[keep] = to_float(position);
     quadric_[keep] += quadric_[drop];
     boundary_[keep] = boundary_[keep] || boundary_[drop];
@@ -527,6 +540,7 @@ class Simplifier {
   std::vector<Quadric> quadric_;
   QuaternaryHeap<Candidate, Cheaper> heap_;
   std::size_t compact_at_ = 0;
+  std::vector<std::uint8_t> version_;  // per vertex, wrapping: bumped when a collapse changes it
   std::vector<Index> around_, shared_, nk_, nd_, common_;
   std::vector<std::pair<Index, int>> edge_count_;  // scratch, kept to avoid allocations
   std::size_t live_vertices_ = 0;
