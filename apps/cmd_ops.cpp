@@ -35,7 +35,7 @@ std::map<std::string, std::string> parse_params(const std::vector<std::string>& 
 void write_correction(const mesh::Mesh& base, const mesh::Mesh& result, const protocol::EditList& edits,
                       const std::string& path) {
   auto bytes = protocol::encode_correction(base, mesh::mesh_sha256(base), mesh::mesh_sha256(result), edits);
-  protocol::write_file_bytes(path, bytes);
+  mesh::write_file_bytes(path, bytes);
 }
 
 int run_op(const OpArgs& args) {
@@ -107,7 +107,7 @@ void add_diff_patch_commands(CLI::App& app, int& exit_status) {
   patch->add_option("-o,--output", *pout, "Corrected mesh")->required();
   patch->callback([pa, pc, pout, &exit_status] {
     mesh::Mesh base = mesh::read_mesh(*pa);
-    auto bytes = protocol::read_file_bytes(*pc);
+    auto bytes = mesh::read_file_bytes(*pc);
     mesh::write_mesh(protocol::apply_correction(base, bytes), *pout);
     exit_status = 0;
   });

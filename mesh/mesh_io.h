@@ -60,4 +60,9 @@ Mesh read_mesh_from_memory(std::span<const std::uint8_t> bytes, const std::strin
 // \throws InvalidInput for an unknown extension, IoError when writing fails.
 void write_mesh(const Mesh& mesh, const std::string& path);
 
+// A whole file's bytes, in one read. \throws IoError.
+std::vector<std::uint8_t> read_file_bytes(const std::string& path);
+// Written to `<path>.tmp`, then renamed. \throws IoError.
+void write_file_bytes(const std::string& path, std::span<const std::uint8_t> bytes);
+
 }  // namespace meshflow::mesh

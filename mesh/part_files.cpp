@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "mesh/errors.h"
+#include "mesh/mesh_io.h"
 
 namespace meshflow::mesh {
 namespace {
@@ -47,7 +48,9 @@ class Cursor {
 
 std::vector<std::uint8_t> encode_part(const PartFile& part) {
   const bool quadrics = !part.quadrics.empty();
-  std::vector<std::uint8_t> out(kMagic, kMagic + 8);
+  std::vector<std::uint8_t> out;
+  out.reserve(25 + part.positions.size() * (8 + 12 + 1 + (quadrics ? 88 : 0)) + part.triangles.size() * 12);
+  out.assign(kMagic, kMagic + 8);
   put<std::uint64_t>(out, part.positions.size());
   put<std::uint64_t>(out, part.triangles.size());
   put<std::uint8_t>(out, quadrics);
@@ -112,10 +115,7 @@ void write_part(const PartFile& part, const std::string& path) {
 }
 
 PartFile read_part(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(path + ": cannot open the part file");
-  std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  return decode_part(bytes, path);
+  return decode_part(read_file_bytes(path), path);
 }
 
 std::string encode_parts_index(const PartsIndex& index) {

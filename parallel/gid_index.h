@@ -1,9 +1,10 @@
 #pragma once
 // Where a global vertex id sits in an ascending list of them, in about constant time: the ids
-// are bucketed by value (64 ids a bucket) and each bucket remembers where its ids start. The
-// table is 4 bytes per 64 ids of the list's range (16 MB for a part spread over 250M ids),
-// replacing a binary search per triangle corner, which was most of a partition's time.
+// are bucketed by value (64 ids a bucket, wider when the list is sparse: never more buckets
+// than ids) and each bucket remembers where its ids start. This replaced a binary search over
+// the whole list per triangle corner, which was most of a partition's time.
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -15,6 +16,7 @@ class GidIndex {
 
   explicit GidIndex(std::vector<std::uint32_t> ascending) : gids_(std::move(ascending)) {
     if (gids_.empty()) return;
+    while ((std::uint64_t{gids_.back() - gids_.front()} >> shift_) > gids_.size()) ++shift_;
     const std::size_t buckets = bucket(gids_.back()) + 2;
     start_.resize(buckets);
     std::size_t i = 0;
@@ -27,13 +29,14 @@ class GidIndex {
   std::size_t find(std::uint32_t gid) const {
     if (gids_.empty() || gid < gids_.front() || gid > gids_.back()) return npos;
     const std::size_t b = bucket(gid);
-    for (std::size_t i = start_[b]; i < start_[b + 1]; ++i)
-      if (gids_[i] == gid) return i;
-    return npos;
+    auto first = gids_.begin() + start_[b], last = gids_.begin() + start_[b + 1];
+    auto it = std::lower_bound(first, last, gid);  // dense runs: at most 64 ids, a cache line or two
+    return it != last && *it == gid ? static_cast<std::size_t>(it - gids_.begin()) : npos;
   }
 
  private:
-  std::size_t bucket(std::uint32_t gid) const { return (gid - gids_.front()) >> 6; }
+  std::size_t bucket(std::uint32_t gid) const { return (gid - gids_.front()) >> shift_; }
+  unsigned shift_ = 6;
   std::vector<std::uint32_t> gids_;
   std::vector<std::uint32_t> start_;
 };

@@ -251,6 +251,9 @@ PartitionInfo partition_file(const std::string& input, std::size_t vertices_per_
       auto copies = load_records<CopyRecord>(scratch + "/F-" + id);
       std::sort(copies.begin(), copies.end(), [](const CopyRecord& a, const CopyRecord& b) { return a.gid < b.gid; });
       mesh::PartFile part;
+      part.global_ids.reserve(own.size() + copies.size());
+      part.positions.reserve(own.size() + copies.size());
+      part.shared.reserve(own.size() + copies.size());
       std::size_t i = 0, k = 0;
       while (i < own.size() || k < copies.size()) {
         if (i < own.size() && !used[i]) {

@@ -47,8 +47,4 @@ EditList decode_correction(const mesh::Mesh& base, std::span<const std::uint8_t>
 // throws InvalidInput saying which hash differs, and returns nothing half-patched.
 mesh::Mesh apply_correction(const mesh::Mesh& base, std::span<const std::uint8_t> bytes);
 
-// File helpers. \throws IoError.
-std::vector<std::uint8_t> read_file_bytes(const std::string& path);
-void write_file_bytes(const std::string& path, std::span<const std::uint8_t> bytes);
-
 }  // namespace meshflow::protocol

@@ -15,6 +15,7 @@
 #include "mesh/canonical_ply.h"
 #include "mesh/errors.h"
 #include "mesh/measures.h"
+#include "mesh/mesh_io.h"
 #include "protocol/correction.h"
 #include "protocol/http_client.h"
 #include "protocol/http_server.h"
@@ -305,11 +306,7 @@ struct NodeServer::Impl {
     const auto incoming = cache->files_dir() / ("incoming-" + std::to_string(next_incoming++) + ".mfp");
     protocol::DownloadResult got = protocol::http_download(part_url, incoming.string());
     if (!got.ok()) throw IoError("cannot fetch the part " + part_url + ": " + got.describe());
-    std::vector<std::uint8_t> bytes;
-    {
-      std::ifstream in(incoming, std::ios::binary);
-      bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-    }
+    std::vector<std::uint8_t> bytes = mesh::read_file_bytes(incoming.string());
     std::filesystem::remove(incoming);
     mesh::PartFile part = mesh::decode_part(bytes, part_url);
     bytes = {};

@@ -12,6 +12,7 @@
 #include "mesh/mesh_io.h"
 #include "mesh/part_files.h"
 #include "parallel/bsp_partition.h"
+#include "parallel/gid_index.h"
 #include "services/compare.h"
 #include "services/part_simplify.h"
 #include "services/simplify.h"
@@ -29,6 +30,24 @@ std::string generated(const meshflow::testing::TempDir& dir, mesh::Shape shape, 
   std::string path = dir.file(shape == mesh::Shape::Sphere ? "sphere.ply" : "terrain.ply");
   mesh::generate_mesh(g, path);
   return path;
+}
+
+TEST(GidIndex, FindsEveryIdOfDenseRunsAndSparseListsAndNothingElse) {
+  // Runs of consecutive ids (a grid's rows in a cell), isolated ids and a far outlier.
+  std::vector<std::uint32_t> ids;
+  for (std::uint32_t row = 0; row < 50; ++row)
+    for (std::uint32_t k = 0; k < 90; ++k) ids.push_back(1000 + row * 700 + k);
+  for (std::uint32_t k = 0; k < 40; ++k) ids.push_back(200000 + k * 997);
+  ids.push_back(4000000000u);
+  std::vector<std::uint8_t> member(240000, 0);
+  for (auto g : ids)
+    if (g < member.size()) member[g] = 1;
+  GidIndex index(ids);
+  for (std::size_t i = 0; i < ids.size(); ++i) ASSERT_EQ(index.find(ids[i]), i) << ids[i];
+  for (std::uint32_t g = 0; g < member.size(); ++g)
+    if (!member[g]) ASSERT_EQ(index.find(g), GidIndex::npos) << g;
+  EXPECT_EQ(index.find(4000000001u), GidIndex::npos);
+  EXPECT_EQ(GidIndex({}).find(0), GidIndex::npos);
 }
 
 TEST(BspPartition, CellsCoverEveryVertexAndStayNearTheLimit) {
