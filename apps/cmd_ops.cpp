@@ -1,5 +1,5 @@
 // meshflow op NAME IN [-o OUT] [--param k=v ...] [--correction C.mfc]
-// meshflow compare A B [--json]
+// meshflow compare A B [--json] [--one-way]
 // meshflow diff A B -o C.mfc        meshflow patch A C.mfc -o B
 #include <cstdio>
 #include <iostream>
@@ -73,14 +73,18 @@ void add_op_command(CLI::App& app, int& exit_status) {
 
 void add_compare_command(CLI::App& app, int& exit_status) {
   auto a = std::make_shared<std::string>(), b = std::make_shared<std::string>();
-  auto json = std::make_shared<bool>(false);
+  auto json = std::make_shared<bool>(false), one_way = std::make_shared<bool>(false);
   CLI::App* cmd = app.add_subcommand("compare", "Metro-style distance between two meshes (% of A's diagonal)");
   cmd->add_option("A", *a, "Reference mesh")->required();
   cmd->add_option("B", *b, "Compared mesh")->required();
   cmd->add_flag("--json", *json, "Print one JSON object");
-  cmd->callback([a, b, json, &exit_status] {
-    services::CompareResult r = services::compare(mesh::read_mesh(*a), mesh::read_mesh(*b));
+  cmd->add_flag("--one-way", *one_way,
+                "A -> B only, A streamed from its file (never loaded): its vertices are the samples");
+  cmd->callback([a, b, json, one_way, &exit_status] {
+    services::CompareResult r = *one_way ? services::compare_one_way(*a, mesh::read_mesh(*b))
+                                         : services::compare(mesh::read_mesh(*a), mesh::read_mesh(*b));
     if (*json) std::cout << r.to_json() << std::endl;
+    else if (r.one_way) std::printf("mean A->B %.6g%%  max A->B %.6g%%  (of A's diagonal; %zu of A's vertices)\n", r.mean_ab, r.max_ab, r.samples_a);
     else std::printf("mean A->B %.6g%%  max A->B %.6g%%\nmean B->A %.6g%%  max B->A %.6g%%  (of A's diagonal)\n",
                      r.mean_ab, r.max_ab, r.mean_ba, r.max_ba);
     exit_status = 0;

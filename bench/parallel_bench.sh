@@ -5,13 +5,16 @@
 # `cp IN` on the same file in the same run.
 # Figures: wall time per step (from --report) and in total; peak RSS of the coordinator (GNU
 # time) and of the busiest node (VmHWM from /proc before it stops); peak disk use of the parts
-# folder and the nodes' data (sampled every second) over the input's size.
+# folder and the nodes' data (sampled every second) over the input's size; output vertices; the
+# one-way error (`compare --one-way`: the input streamed, about 2M of its vertices measured to the
+# result, % of the diagonal; not timed); the output's SHA-256 (equal for 1, 2 and 4 nodes: the
+# result does not depend on them).
 # SIZES (triangles, default "10000000 100000000"), NODES (default "1 2 4"), KINDS (default
 # "terrain sphere"); BIG=1 adds a 500M-triangle terrain when the disk has room (checked first).
 set -uo pipefail
 MF=$(realpath "${MESHFLOW:-build/meshflow}"); OUT=$(realpath -m "${BENCH_OUT:-bench/out}/parallel")
 mkdir -p "$OUT"
-SIZES=${SIZES:-"10000000 100000000"}
+SIZES=${SIZES-"10000000 100000000"}  # SIZES="" BIG=1: the 500M run alone
 NODES=${NODES:-"1 2 4"}
 KINDS=${KINDS:-"terrain sphere"}
 TIMEOUT=${TIMEOUT:-7200}
@@ -30,7 +33,7 @@ if [ -n "${BIG:-}" ]; then
   else runs+=("terrain:500000000"); fi
 fi
 
-printf "%-18s %5s %6s %9s %8s %8s %8s %8s %8s %8s %8s %7s %7s %7s\n" input nodes parts partit_s parts_s seams_s merge_s total_s wall_s coordMB nodeMB disk_x cat_s cp_s
+printf "%-18s %5s %6s %9s %8s %8s %8s %8s %8s %8s %8s %7s %7s %7s %9s %9s %12s\n" input nodes parts partit_s parts_s seams_s merge_s total_s wall_s coordMB nodeMB disk_x cat_s cp_s vertices one_way% sha256
 for run in "${runs[@]}"; do
   kind=${run%%:*}; n=${run##*:}; in="$OUT/$kind$n.ply"
   [ -f "$in" ] || "$MF" generate "$kind" --triangles "$n" -o "$in" >/dev/null || { echo "generate $kind $n failed"; continue; }
@@ -61,13 +64,15 @@ for run in "${runs[@]}"; do
     stop_nodes
     if [ $ok = 0 ]; then echo "$kind$n nodes $k failed: $(tail -c 200 "$OUT/err")"; continue; fi
     read wall rss <"$OUT/time"
-    $PY - "$OUT/report.json" "$kind$n" "$k" "$wall" "$rss" "$node_kb" "$(cat "$OUT/disk")" "$in_bytes" "$cat_s" "$cp_s" <<'PYEOF'
+    one_way=$("$MF" compare "$in" "$OUT/out.ply" --one-way --json | $PY -c 'import json,sys; print("%.5f" % json.load(sys.stdin)["mean_ab"])')
+    sha=$(sha256sum "$OUT/out.ply" | cut -c1-12)
+    $PY - "$OUT/report.json" "$kind$n" "$k" "$wall" "$rss" "$node_kb" "$(cat "$OUT/disk")" "$in_bytes" "$cat_s" "$cp_s" "$one_way" "$sha" <<'PYEOF'
 import json, sys
 r = json.load(open(sys.argv[1])); s = r["seconds"]
-name, k, wall, rss, node_kb, disk, in_bytes, cat_s, cp_s = sys.argv[2:]
-print("%-18s %5s %6d %9.1f %8.1f %8.1f %8.1f %8.1f %8.1f %8.0f %8.0f %7.2f %7s %7s" % (name, k, r["parts"], s["partition"],
+name, k, wall, rss, node_kb, disk, in_bytes, cat_s, cp_s, one_way, sha = sys.argv[2:]
+print("%-18s %5s %6d %9.1f %8.1f %8.1f %8.1f %8.1f %8.1f %8.0f %8.0f %7.2f %7s %7s %9d %9s %12s" % (name, k, r["parts"], s["partition"],
       s["parts"], s["seams"], s["merge"], s["total"], float(wall), int(rss) / 1024, int(node_kb) / 1024,
-      int(disk) / int(in_bytes), cat_s, cp_s))
+      int(disk) / int(in_bytes), cat_s, cp_s, r["output_vertices"], one_way, sha))
 PYEOF
   done
   rm -rf "$OUT/parts" "$OUT"/node*

@@ -30,42 +30,7 @@ if [ -z "${SMALL:-}" ]; then
   done
 fi
 
-mlx() {  # mlx FACES -> script path
-  cat >"$OUT/qecd.mlx" <<MLX
-<!DOCTYPE FilterScript>
-<FilterScript>
- <filter name="Simplification: Quadric Edge Collapse Decimation">
-  <Param type="RichInt" value="$1" name="TargetFaceNum"/>
-  <Param type="RichFloat" value="0" name="TargetPerc"/>
-  <Param type="RichFloat" value="0.3" name="QualityThr"/>
-  <Param type="RichBool" value="true" name="PreserveBoundary"/>
-  <Param type="RichFloat" value="1" name="BoundaryWeight"/>
-  <Param type="RichBool" value="false" name="PreserveNormal"/>
-  <Param type="RichBool" value="false" name="PreserveTopology"/>
-  <Param type="RichBool" value="true" name="OptimalPlacement"/>
-  <Param type="RichBool" value="false" name="PlanarQuadric"/>
-  <Param type="RichFloat" value="0.001" name="PlanarWeight"/>
-  <Param type="RichBool" value="false" name="QualityWeight"/>
-  <Param type="RichBool" value="true" name="AutoClean"/>
-  <Param type="RichBool" value="false" name="Selected"/>
- </filter>
-</FilterScript>
-MLX
-  echo "$OUT/qecd.mlx"
-}
-
-run() {  # run OUTPUT CMD... ; prints "seconds MB vertices mean_error" or "failed"
-  local out=$1; shift
-  rm -f "$out"
-  if ! timeout "$TIMEOUT" /usr/bin/time -f "%e %M" -o "$OUT/t.txt" "$@" >"$OUT/run.log" 2>&1 || [ ! -s "$out" ]; then
-    echo "failed - - -"; return
-  fi
-  read s kb <"$OUT/t.txt"
-  local nv err
-  nv=$("$MF" op NumberOfVertices "$out" 2>/dev/null || echo "?")
-  err=$("$MF" compare "$IN" "$out" --json 2>/dev/null | python3 -c 'import json,sys; d=json.load(sys.stdin); print("%.5f" % ((d["mean_ab"] + d["mean_ba"]) / 2))' 2>/dev/null || echo "?")
-  echo "$s $((kb / 1024)) $nv $err"
-}
+source "$(dirname "$0")/simplify_peers.sh"
 
 echo "| input | target v | program | wall s | peak MB | vertices | mean error % |"
 echo "|---|---:|---|---:|---:|---:|---:|"
@@ -74,9 +39,7 @@ for item in "${inputs[@]}"; do
   tris=$("$MF" op NumberOfTriangles "$IN")
   declare -A res=()
   res[meshflow]=$(run "$OUT/mf.ply" "$MF" op Simplify "$IN" -o "$OUT/mf.ply" --param targetVertices=$v)
-  res[meshlab]=$(run "$OUT/ml.ply" xvfb-run -a meshlabserver -i "$IN" -o "$OUT/ml.ply" -s "$(mlx $((2 * v)))")
-  res[openmesh]=$(run "$OUT/om.ply" OpenMesh-commandlineDecimater -M Q -n -$v -i "$IN" -o "$OUT/om.ply")
-  res[cgal]=$(run "$OUT/cg.ply" "$BIN/cgal_simplify" "$IN" "$OUT/cg.ply" $v)
+  while read -r p r; do res[$p]=$r; done < <(peers "$v")
   res[meshoptimizer]=$(run "$OUT/mo.ply" "$BIN/meshopt_simplify" "$IN" "$OUT/mo.ply" $v)
   for p in meshflow meshlab openmesh cgal meshoptimizer; do
     read s mb nv err <<<"${res[$p]}"

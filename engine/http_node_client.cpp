@@ -371,9 +371,23 @@ StepReport HttpNodeClient::run_split(const std::vector<NodeCandidate>& nodes, co
   split.vertices_per_part = std::max<std::uint64_t>(smallest / 2, 1000);
   parallel::NodeDispatch dispatch(urls, split.parts_dir, options_.token);
   split.workers = static_cast<unsigned>(dispatch.nodes());
-  split.runner = [&dispatch](std::size_t p, double max_error_abs) { return dispatch.run(p, max_error_abs); };
-  split.progress = options_.progress;
-  parallel::DistributedReport done = parallel::simplify_distributed(in, out, split);
+  split.runner = [this, &dispatch](std::size_t p, double max_error_abs) {
+    if (options_.cancelled && options_.cancelled()) throw std::runtime_error("cancelled");
+    return dispatch.run(p, max_error_abs);
+  };
+  // A cancelled job stops at the next progress report (the parts under way on nodes finish there).
+  split.progress = [this](const std::string& step, double fraction) {
+    if (options_.cancelled && options_.cancelled()) throw std::runtime_error("cancelled");
+    if (options_.progress) options_.progress(step, fraction);
+  };
+  parallel::DistributedReport done;
+  try {
+    done = parallel::simplify_distributed(in, out, split);
+  } catch (...) {
+    std::error_code ignored;
+    fs::remove_all(dir, ignored);  // the input copy, the parts and their scratch
+    throw;
+  }
   fs::remove(in);
   fs::remove_all(dir / "parts");
 

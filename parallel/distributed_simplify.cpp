@@ -133,13 +133,13 @@ void simplify_parts(const DistributedParams& params, DistributedReport& report) 
         else if (!params.worker_executable.empty())
           report.part_stats[p] = run_worker_process(params.worker_executable, params.parts_dir, p, report.max_error_abs);
         else report.part_stats[p] = simplify_one_part(params.parts_dir, p, report.max_error_abs);
+        std::size_t n = ++finished;
+        if (params.progress) params.progress("parts", double(n) / double(parts));  // may throw to stop
       } catch (const std::exception& e) {
         std::lock_guard lock(error_mutex);
         if (error.empty()) error = "part " + std::to_string(p) + ": " + e.what();
         next = parts;  // stop handing out parts
       }
-      std::size_t n = ++finished;
-      if (params.progress) params.progress("parts", double(n) / double(parts));
     }
   };
   std::vector<std::thread> pool;

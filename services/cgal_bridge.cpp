@@ -214,4 +214,26 @@ Distance surface_distance(const mesh::Mesh& a, const mesh::Mesh& b, std::size_t 
   return d;
 }
 
+struct DistanceToSurface::Tree {
+  using Triangle3 = Kernel::Triangle_3;
+  using Primitive = CGAL::AABB_triangle_primitive<Kernel, std::vector<Triangle3>::const_iterator>;
+  std::vector<Triangle3> triangles;
+  CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>> aabb;
+};
+
+DistanceToSurface::DistanceToSurface(const mesh::Mesh& surface) : tree_(std::make_unique<Tree>()) {
+  for (const auto& t : surface.triangles) {
+    Tree::Triangle3 tri(to_cgal(surface.positions[t[0]]), to_cgal(surface.positions[t[1]]), to_cgal(surface.positions[t[2]]));
+    if (!tri.is_degenerate()) tree_->triangles.push_back(tri);
+  }
+  tree_->aabb.insert(tree_->triangles.begin(), tree_->triangles.end());
+  tree_->aabb.accelerate_distance_queries();
+}
+
+DistanceToSurface::~DistanceToSurface() = default;
+
+double DistanceToSurface::operator()(const Point& p) const {
+  return tree_->triangles.empty() ? 0.0 : std::sqrt(tree_->aabb.squared_distance(to_cgal(p)));
+}
+
 }  // namespace meshflow::services::cgal

@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -40,5 +41,16 @@ struct Distance {
 };
 Distance surface_distance(const mesh::Mesh& a, const mesh::Mesh& b, std::size_t samples_a,
                           std::size_t samples_b, std::uint64_t seed);
+
+// Distances from points to one surface, for inputs streamed point by point.
+class DistanceToSurface {
+ public:
+  explicit DistanceToSurface(const mesh::Mesh& surface);
+  ~DistanceToSurface();
+  double operator()(const Point& p) const;  // 0 when the surface has no triangle
+ private:
+  struct Tree;
+  std::unique_ptr<Tree> tree_;
+};
 
 }  // namespace meshflow::services::cgal

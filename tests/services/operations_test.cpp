@@ -278,5 +278,27 @@ TEST(Compare, IdenticalMeshesAreAtDistanceZeroAndAShiftIsMeasured) {
   EXPECT_GT(c.mean_ab, 0);
 }
 
+TEST(Compare, OneWayStreamsTheFirstMeshAndMeasuresItsVertices) {
+  meshflow::testing::TempDir dir;
+  Mesh shifted = cube();
+  for (auto& p : shifted.positions) p[2] += 0.1f;
+  mesh::write_mesh(shifted, dir.file("shifted.ply"));
+  CompareResult c = compare_one_way(dir.file("shifted.ply"), cube());
+  EXPECT_TRUE(c.one_way);
+  EXPECT_EQ(c.samples_a, 8u);
+  // The top corners are 0.1 above the cube, the bottom ones on its sides; the diagonal is sqrt(3).
+  EXPECT_NEAR(c.max_ab, 100 * 0.1 / std::sqrt(3.0), 1e-4);
+  EXPECT_NEAR(c.mean_ab, 100 * 0.05 / std::sqrt(3.0), 1e-4);
+  EXPECT_NE(c.to_json().find("\"one_way\": true"), std::string::npos);
+
+  const std::string kitten_path = meshflow::testing::shared_meshes() + "/real/kitten.off";
+  Mesh kitten = mesh::read_mesh(kitten_path);
+  CompareResult same = compare_one_way(kitten_path, kitten, {.max_samples = 500});
+  EXPECT_NEAR(same.mean_ab, 0, 1e-6);
+  EXPECT_GT(same.samples_a, 250u);  // about 1 in ceil(V / 500) of the vertices, chosen by hash
+  EXPECT_LE(same.samples_a, 1000u);
+  EXPECT_THROW(compare_one_way(dir.file("missing.ply"), kitten), std::exception);
+}
+
 }  // namespace
 }  // namespace meshflow::services

@@ -3,12 +3,14 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <thread>
 
+#include "mesh/generate.h"
 #include "mesh/measures.h"
 #include "mesh/mesh_io.h"
 #include "protocol/http_client.h"
@@ -391,6 +393,43 @@ TEST(Hub, LongRunsAnswerWithATaskThatTheEnginePollsAndCancelStopsThem) {
   EXPECT_NE(stream.find("\"state\":\"cancelled\""), std::string::npos) << stream;
   // The node stopped the smoothing: it answers at once and its task says cancelled.
   EXPECT_TRUE(protocol::http_request("GET", node_url + "/healthz").ok());
+}
+
+TEST(Hub, ASimplifyInPartsIsCancelledBetweenPartsAndLeavesNoPartFiles) {
+  TempDir dir;
+  mesh::GenerateParams g;
+  g.shape = mesh::Shape::Terrain;
+  g.triangles = 1000000;  // 500k vertices: 250 parts of 2,000 on nodes that take 4,000
+  mesh::generate_mesh(g, dir.file("terrain.ply"));
+  ChildProcess hub_process({MESHFLOW_BINARY, "hub", "--port", "0", "--data", dir.file("hub")});
+  std::string hub = hub_process.ready_url();
+  ASSERT_FALSE(hub.empty());
+  std::string token = dir.file("hub") + "/node.token";
+  ChildProcess a({MESHFLOW_BINARY, "node", "--hub", hub, "--token-file", token, "--data", dir.file("a"),
+                  "--capacity", "4000"});
+  ChildProcess b({MESHFLOW_BINARY, "node", "--hub", hub, "--token-file", token, "--data", dir.file("b"),
+                  "--capacity", "4000"});
+  ASSERT_FALSE(a.ready_url().empty());
+  ASSERT_FALSE(b.ready_url().empty());
+  const char* xml = "<workflow><body><atomic><name>Simplify</name><parameters><parameter>0.2</parameter>"
+                    "</parameters></atomic></body></workflow>";
+  std::string id = submit(hub, dir, xml, dir.file("terrain.ply"));
+  ASSERT_FALSE(id.empty());
+  bool in_parts = false;  // the step's node label shows the parts being simplified
+  for (int i = 0; i < 3000 && !in_parts; ++i) {
+    json now = get_json(hub + "/api/jobs/" + id);
+    in_parts = now.is_object() && !now["steps"].empty() &&
+               now["steps"][0]["node"].get<std::string>().find("parts ") != std::string::npos &&
+               now["steps"][0]["node"].get<std::string>().find(" - parts") != std::string::npos;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_TRUE(in_parts);
+  auto cancelled_at = std::chrono::steady_clock::now();
+  EXPECT_EQ(protocol::http_request("DELETE", hub + "/api/jobs/" + id).status, 202);
+  json ended = wait_for(hub, id, std::chrono::seconds(60));
+  EXPECT_EQ(ended["state"], "cancelled") << ended.dump();
+  EXPECT_LT(std::chrono::steady_clock::now() - cancelled_at, std::chrono::seconds(10));
+  EXPECT_FALSE(std::filesystem::exists(dir.file("hub") + "/jobs/" + id + "/split/split-1")) << "part files left behind";
 }
 
 TEST(Hub, ANodeKilledMidStepIsReplacedAndTheJobFinishes) {
