@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <set>
 #include <sstream>
 
@@ -13,6 +14,7 @@
 #include "mesh/mesh_io.h"
 #include "mesh/part_files.h"
 #include "parallel/bsp_partition.h"
+#include "parallel/cell_ids.h"
 #include "parallel/gid_index.h"
 #include "parallel/scratch_files.h"
 
@@ -80,22 +82,22 @@ class AssignSink : public mesh::MeshSink {
         vertices_(scratch + "/V-", bsp.cells()),
         triangles_(scratch + "/T-", bsp.cells()),
         requests_(scratch + "/R-", bsp.cells()),
+        cell_of_(std::make_unique<CellIds>(scratch + "/cells.bin")),
         expected_(expected_vertices),
-        progress_(progress) {
-    cell_of_.reserve(expected_vertices);
-  }
+        progress_(progress) {}
   void vertices(std::span<const mesh::Point> batch) override {
     for (const auto& p : batch) {
-      if (cell_of_.size() >= 0xffffffffu) throw LimitExceeded("vertices in one mesh", 0xffffffffu, cell_of_.size() + 1);
+      if (cell_of_->size() >= 0xffffffffu) throw LimitExceeded("vertices in one mesh", 0xffffffffu, cell_of_->size() + 1);
       std::uint32_t cell = bsp_.locate(p);
-      vertices_.add(cell, {static_cast<std::uint32_t>(cell_of_.size()), {p[0], p[1], p[2]}});
-      cell_of_.push_back(cell);
+      vertices_.add(cell, {static_cast<std::uint32_t>(cell_of_->size()), {p[0], p[1], p[2]}});
+      cell_of_->push_back(cell);
     }
-    if (progress_ && expected_) progress_(0.5 * std::min(1.0, double(cell_of_.size()) / double(expected_)));
+    if (progress_ && expected_) progress_(0.5 * std::min(1.0, double(cell_of_->size()) / double(expected_)));
   }
   void triangles(std::span<const mesh::Triangle> batch) override {
     for (const auto& t : batch) {
-      std::uint32_t c[3] = {cell_of_[t[0]], cell_of_[t[1]], cell_of_[t[2]]};
+      CellIds& cell_of = *cell_of_;
+      std::uint32_t c[3] = {cell_of[t[0]], cell_of[t[1]], cell_of[t[2]]};
       std::uint32_t owner;
       if (c[0] == c[1] || c[0] == c[2]) owner = c[0];
       else if (c[1] == c[2]) owner = c[1];
@@ -113,9 +115,9 @@ class AssignSink : public mesh::MeshSink {
     triangles_.flush();
     requests_.flush();
   }
-  std::uint64_t vertex_count() const { return cell_of_.size(); }
+  std::uint64_t vertex_count() const { return cell_of_->size(); }
   std::uint64_t triangles_in(std::size_t cell) const { return triangles_.count(cell); }
-  void release() { cell_of_ = {}; }
+  void release() { cell_of_.reset(); }
   std::uint64_t triangle_count = 0;
 
  private:
@@ -123,7 +125,7 @@ class AssignSink : public mesh::MeshSink {
   Buckets<VertexRecord> vertices_;
   Buckets<TriangleRecord> triangles_;
   Buckets<RequestRecord> requests_;
-  std::vector<std::uint32_t> cell_of_;
+  std::unique_ptr<CellIds> cell_of_;
   std::uint64_t expected_;
   const std::function<void(double)>& progress_;
 };

@@ -10,8 +10,9 @@
 //           id): each requesting cell gets a copy of the vertex, flagged shared when two or more
 //           parts use it; the part adjacency graph comes out of the same join;
 //   parts:  per cell, part-<p>.mfp (mesh/part_files.h), cells without triangles dropped.
-// Memory: one u32 cell id per input vertex during pass 2 (so that a triangle finds its corners'
-// cells), then one part at a time. Disk: the scratch files are deleted as the parts are written.
+// Memory: during pass 2 the vertices' cell ids (so that a triangle finds its corners' cells) go
+// to a scratch file read back in windows (parallel/cell_ids.h, at most 256 MB held), then one part
+// at a time. Disk: the scratch files are deleted as the parts are written.
 
 #include <cstddef>
 #include <cstdint>

@@ -12,6 +12,7 @@
 #include "mesh/mesh_io.h"
 #include "mesh/part_files.h"
 #include "parallel/bsp_partition.h"
+#include "parallel/cell_ids.h"
 #include "parallel/gid_index.h"
 #include "services/compare.h"
 #include "services/part_simplify.h"
@@ -48,6 +49,25 @@ TEST(GidIndex, FindsEveryIdOfDenseRunsAndSparseListsAndNothingElse) {
     if (!member[g]) ASSERT_EQ(index.find(g), GidIndex::npos) << g;
   EXPECT_EQ(index.find(4000000001u), GidIndex::npos);
   EXPECT_EQ(GidIndex({}).find(0), GidIndex::npos);
+}
+
+TEST(CellIds, ReadsBackEveryIdThroughFewWindowsWhileStillAppending) {
+  meshflow::testing::TempDir dir;
+  const std::uint64_t n = 3 * CellIds::kWindow + CellIds::kWindow / 2;
+  auto cell = [](std::uint64_t v) { return static_cast<std::uint32_t>((v * 2654435761u) >> 7); };
+  {
+    CellIds ids(dir.file("cells.bin"), 2);
+    for (std::uint64_t v = 0; v < n; ++v) {
+      ids.push_back(cell(v));
+      if (v % 100003 == 0) ASSERT_EQ(ids[v / 2], cell(v / 2)) << v;  // interleaved, as OBJ may be
+    }
+    ASSERT_EQ(ids.size(), n);
+    for (std::uint64_t v = 0; v < n; v += 7) ASSERT_EQ(ids[v], cell(v)) << v;      // in order
+    for (std::uint64_t v = n; v-- > 0;) if (v % 1013 == 0) ASSERT_EQ(ids[v], cell(v)) << v;  // backwards
+    EXPECT_GT(ids.windows_loaded(), 3u);  // two windows held: the others were read again
+    EXPECT_TRUE(std::filesystem::exists(dir.file("cells.bin")));
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir.file("cells.bin")));
 }
 
 TEST(BspPartition, CellsCoverEveryVertexAndStayNearTheLimit) {
