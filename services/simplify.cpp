@@ -201,9 +201,10 @@ class Simplifier {
     std::vector<bool> lock(V, false);
     for (Index v : locked_) lock[v] = true;
     lock_ = std::move(lock);
+    fixed_.assign(V, false);
     if (params_.locked)
       for (std::size_t v = 0; v < V && v < params_.locked->size(); ++v)
-        if ((*params_.locked)[v]) lock_[v] = true;
+        if ((*params_.locked)[v]) fixed_[v] = true;
     alive_.assign(V, false);
     for (std::size_t v = 0; v < V; ++v) alive_[v] = !vt_.empty(static_cast<Index>(v));
     version_.assign(V, 0);
@@ -409,7 +410,7 @@ class Simplifier {
   // The collapse of edge (a, b): which end stays, where it goes, at what cost. False when the
   // edge may not collapse at all.
   bool evaluate(Index a, Index b, Placement& out) const {
-    if (lock_[a] || lock_[b]) return false;
+    if (lock_[a] || lock_[b] || (fixed_[a] && fixed_[b])) return false;
     if (a > b) std::swap(a, b);
     Quadric q = quadric_[a];
     q += quadric_[b];
@@ -417,7 +418,14 @@ class Simplifier {
     Vec options[4];
     int n = 0;
     out.keep = a, out.drop = b;
-    if (ba != bb) {
+    if (fixed_[a] || fixed_[b]) {
+      // Into the fixed end, which stays where it is (a seam vertex of a part absorbs its
+      // neighbours); a boundary vertex goes only along its boundary.
+      const Index keep = fixed_[a] ? a : b, drop = fixed_[a] ? b : a;
+      if (boundary_[drop] && (!boundary_[keep] || !is_boundary_edge(a, b))) return false;
+      out.keep = keep, out.drop = drop;
+      options[n++] = at(keep);
+    } else if (ba != bb) {
       // An interior vertex goes to the boundary one: the boundary stays where it is.
       options[n++] = ba ? at(a) : at(b);
       if (bb) out.keep = b, out.drop = a;
@@ -534,7 +542,9 @@ class Simplifier {
   const SimplifyParams& params_;
   std::vector<mesh::Point> pos_;  // float32 like the output: a placement is rounded before it is costed
   std::vector<mesh::Triangle> tris_;
-  std::vector<bool> tri_alive_, alive_, boundary_, lock_;
+  std::vector<bool> tri_alive_, alive_, boundary_;
+  std::vector<bool> lock_;   // never touched: degenerate triangles' and non-manifold vertices
+  std::vector<bool> fixed_;  // params.locked: never moved nor removed, but may absorb a neighbour
   std::vector<Index> locked_;
   VertexFans vt_{{}, 0, {}};
   std::vector<Quadric> quadric_;

@@ -24,8 +24,9 @@ struct SimplifyParams {
   std::size_t target_vertices = 0;  // 0: no vertex target
   std::function<void(double)> progress;
   const std::atomic<bool>* cancel = nullptr;
-  // For simplification in pieces (parallel/). `locked` vertices are never moved nor removed,
-  // and a border edge between two locked vertices is a seam: it gets no constraint plane.
+  // For simplification in pieces (parallel/). `locked` vertices are never moved nor removed (a
+  // neighbour may collapse into one, which stays in place), and a border edge between two locked
+  // vertices is a seam: it gets no constraint plane.
   const std::vector<bool>* locked = nullptr;
   // Start from these per-vertex quadrics instead of the triangles' planes; border planes are
   // then added only on border edges whose two ends are flagged in `seam` (edges that had none).
