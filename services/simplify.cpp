@@ -235,6 +235,7 @@ class Simplifier {
       if (alive_[v]) push_edges_of(static_cast<Index>(v), /*only_greater=*/true);
     heap_.heapify();
     compact_at_ = std::max<std::size_t>(heap_.size() * 9 / 8, 1024);
+    max_error_bits_ = std::bit_cast<std::uint32_t>(static_cast<float>(params_.max_error)) & ~std::uint32_t{0xff};
     SimplifyResult result;
     std::size_t start_vertices = live_vertices_;
     while (!heap_.empty()) {
@@ -244,7 +245,12 @@ class Simplifier {
       Placement place;
       if (!evaluate(c.keep, c.drop, place) || place.keep != c.keep || (key_of(place) ^ c.key) > 0xff)
         continue;  // looked current only because the 8-bit versions wrapped
-      if (params_.max_error > 0 && place.rms > params_.max_error) break;  // ranked by rms in this mode
+      if (params_.max_error > 0 && place.rms > params_.max_error) {
+        // Ranked by rms in this mode, in keys that keep 15 bits of mantissa: stop once past the
+        // bound's key, skip an entry above the bound that shares its key.
+        if ((c.key & ~std::uint32_t{0xff}) > max_error_bits_) break;
+        continue;
+      }
       if (!collapse(c.keep, c.drop, place.position)) continue;
       result.collapses++;
       result.max_rms_error = std::max(result.max_rms_error, place.rms);
@@ -551,6 +557,7 @@ class Simplifier {
   QuaternaryHeap<Candidate, Cheaper> heap_;
   std::size_t compact_at_ = 0;
   std::vector<std::uint8_t> version_;  // per vertex, wrapping: bumped when a collapse changes it
+  std::uint32_t max_error_bits_ = 0;    // params.max_error in the keys' cost bits
   std::vector<Index> around_, shared_, nk_, nd_, common_;
   std::vector<std::pair<Index, int>> edge_count_;  // scratch, kept to avoid allocations
   std::size_t live_vertices_ = 0;
