@@ -32,6 +32,15 @@ const char* kRepair = R"(<workflow><body>
   <atomic><name>RemoveDegenerateTriangles</name></atomic>
 </body></workflow>)";
 
+// A node registered with the hub whose data folder is dir/hub; its own data in dir/NAME.
+std::vector<std::string> hub_node(const std::string& hub, const TempDir& dir, const std::string& name,
+                                  std::vector<std::string> extra = {}) {
+  std::vector<std::string> argv{MESHFLOW_BINARY, "node", "--hub", hub, "--token-file", dir.file("hub") + "/node.token",
+                                "--data", dir.file(name)};
+  argv.insert(argv.end(), extra.begin(), extra.end());
+  return argv;
+}
+
 // Submits a job with curl (multipart, as a browser or script would); returns its id.
 std::string submit(const std::string& hub, const TempDir& dir, const std::string& xml, const std::string& mesh) {
   std::ofstream(dir.file("w.xml")) << xml;
@@ -128,9 +137,8 @@ TEST(Hub, AStepOnADeadNodeRunsAgainOnAnother) {
   ChildProcess hub_process({MESHFLOW_BINARY, "hub", "--port", "0", "--data", dir.file("hub")});
   std::string hub = hub_process.ready_url();
   ASSERT_FALSE(hub.empty());
-  std::string token = dir.file("hub") + "/node.token";
-  ChildProcess a({MESHFLOW_BINARY, "node", "--hub", hub, "--token-file", token, "--data", dir.file("a")});
-  ChildProcess b({MESHFLOW_BINARY, "node", "--hub", hub, "--token-file", token, "--data", dir.file("b")});
+  ChildProcess a(hub_node(hub, dir, "a"));
+  ChildProcess b(hub_node(hub, dir, "b"));
   std::string a_url = a.ready_url(), b_url = b.ready_url();
   ASSERT_FALSE(a_url.empty());
   ASSERT_FALSE(b_url.empty());
@@ -149,11 +157,8 @@ TEST(Hub, ASimplifyLargerThanEveryNodeRunsInPartsOnTheNodes) {
   ChildProcess hub_process({MESHFLOW_BINARY, "hub", "--port", "0", "--data", dir.file("hub")});
   std::string hub = hub_process.ready_url();
   ASSERT_FALSE(hub.empty());
-  std::string token = dir.file("hub") + "/node.token";
-  ChildProcess a({MESHFLOW_BINARY, "node", "--hub", hub, "--token-file", token, "--data", dir.file("a"),
-                  "--capacity", "20000"});
-  ChildProcess b({MESHFLOW_BINARY, "node", "--hub", hub, "--token-file", token, "--data", dir.file("b"),
-                  "--capacity", "20000"});
+  ChildProcess a(hub_node(hub, dir, "a", {"--capacity", "20000"}));
+  ChildProcess b(hub_node(hub, dir, "b", {"--capacity", "20000"}));
   ASSERT_FALSE(a.ready_url().empty());
   ASSERT_FALSE(b.ready_url().empty());
   const char* xml = "<workflow><body><atomic><name>Simplify</name><parameters><parameter>0.2</parameter>"
@@ -184,9 +189,8 @@ TEST(Hub, ARestartedHubGoesOnFromTheLastFinishedStep) {
   std::string hub = hub_process->ready_url();
   ASSERT_FALSE(hub.empty());
   std::string port = hub.substr(hub.rfind(':') + 1);
-  std::string token = dir.file("hub") + "/node.token";
-  ChildProcess a({MESHFLOW_BINARY, "node", "--hub", hub, "--token-file", token, "--data", dir.file("a")});
-  ChildProcess b({MESHFLOW_BINARY, "node", "--hub", hub, "--token-file", token, "--data", dir.file("b")});
+  ChildProcess a(hub_node(hub, dir, "a"));
+  ChildProcess b(hub_node(hub, dir, "b"));
   ASSERT_FALSE(a.ready_url().empty());
   ASSERT_FALSE(b.ready_url().empty());
   std::string xml = "<workflow><body>";
@@ -334,9 +338,7 @@ TEST(Hub, LongRunsAnswerWithATaskThatTheEnginePollsAndCancelStopsThem) {
   ChildProcess hub_process({MESHFLOW_BINARY, "hub", "--port", "0", "--data", dir.file("hub")});
   std::string hub = hub_process.ready_url();
   ASSERT_FALSE(hub.empty());
-  std::string token = dir.file("hub") + "/node.token";
-  ChildProcess node({MESHFLOW_BINARY, "node", "--hub", hub, "--token-file", token, "--data", dir.file("n"),
-                     "--answer-within-ms", "0"});
+  ChildProcess node(hub_node(hub, dir, "n", {"--answer-within-ms", "0"}));
   std::string node_url = node.ready_url();
   ASSERT_FALSE(node_url.empty());
   std::string id = submit(hub, dir, kRepair, shared_meshes() + "/defects/elephant-with-holes.off");
@@ -345,7 +347,7 @@ TEST(Hub, LongRunsAnswerWithATaskThatTheEnginePollsAndCancelStopsThem) {
   // Straight to the node: 202 and a task that ends with the result.
   std::string input = hub + "/api/jobs/" + id + "/input";
   protocol::HttpOptions http;
-  http.bearer_token = slurp(token).substr(0, 64);
+  http.bearer_token = slurp(dir.file("hub") + "/node.token").substr(0, 64);
   auto res = protocol::http_request("POST", node_url + "/run/NumberOfBoundaryLoops", json{{"input", input}}.dump(), http);
   ASSERT_EQ(res.status, 202) << res.describe();
   std::string task = json::parse(res.body).value("task", "");
@@ -404,11 +406,8 @@ TEST(Hub, ASimplifyInPartsIsCancelledBetweenPartsAndLeavesNoPartFiles) {
   ChildProcess hub_process({MESHFLOW_BINARY, "hub", "--port", "0", "--data", dir.file("hub")});
   std::string hub = hub_process.ready_url();
   ASSERT_FALSE(hub.empty());
-  std::string token = dir.file("hub") + "/node.token";
-  ChildProcess a({MESHFLOW_BINARY, "node", "--hub", hub, "--token-file", token, "--data", dir.file("a"),
-                  "--capacity", "4000"});
-  ChildProcess b({MESHFLOW_BINARY, "node", "--hub", hub, "--token-file", token, "--data", dir.file("b"),
-                  "--capacity", "4000"});
+  ChildProcess a(hub_node(hub, dir, "a", {"--capacity", "4000"}));
+  ChildProcess b(hub_node(hub, dir, "b", {"--capacity", "4000"}));
   ASSERT_FALSE(a.ready_url().empty());
   ASSERT_FALSE(b.ready_url().empty());
   const char* xml = "<workflow><body><atomic><name>Simplify</name><parameters><parameter>0.2</parameter>"
@@ -437,11 +436,9 @@ TEST(Hub, ANodeKilledMidStepIsReplacedAndTheJobFinishes) {
   ChildProcess hub_process({MESHFLOW_BINARY, "hub", "--port", "0", "--data", dir.file("hub")});
   std::string hub = hub_process.ready_url();
   ASSERT_FALSE(hub.empty());
-  std::string token = dir.file("hub") + "/node.token";
   std::map<std::string, std::unique_ptr<ChildProcess>> nodes;
   for (const char* name : {"a", "b"}) {
-    auto node = std::make_unique<ChildProcess>(std::vector<std::string>{
-        MESHFLOW_BINARY, "node", "--hub", hub, "--token-file", token, "--data", dir.file(name)});
+    auto node = std::make_unique<ChildProcess>(hub_node(hub, dir, name));
     std::string url = node->ready_url();
     ASSERT_FALSE(url.empty());
     nodes[url] = std::move(node);
