@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "mesh/errors.h"
+#include "mesh/index_hash.h"
 #include "mesh/mesh_io.h"
 #include "mesh/part_files.h"
 #include "parallel/bsp_partition.h"
@@ -42,18 +43,14 @@ struct CopyRecord {  // the answer: a foreign vertex for the requesting cell
 // the stride (not every stride-th vertex: on a regular grid that sees a few columns only); the
 // stride doubles, up to 1024 (about the thesis's 1:1000), whenever the sample grows past 2048,
 // so every format (counts declared or not) samples alike.
-std::uint64_t mix(std::uint64_t x) {  // splitmix64's finalizer
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
 
 class SampleSink : public mesh::MeshSink {
  public:
   void vertices(std::span<const mesh::Point> batch) override {
     for (const auto& p : batch) {
       for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
-      if ((mix(count) & (stride_ - 1)) == 0) samples.push_back({mix(count), p});
+      const std::uint64_t h = mesh::index_hash(count);
+      if ((h & (stride_ - 1)) == 0) samples.push_back({h, p});
       ++count;
       if (samples.size() >= 2048 && stride_ < 1024) {
         stride_ *= 2;

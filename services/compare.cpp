@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "mesh/index_hash.h"
 #include "mesh/mesh_io.h"
 
 #include "services/cgal_bridge.h"
@@ -41,7 +42,7 @@ class VertexDistanceSink : public mesh::MeshSink {
   void vertices(std::span<const mesh::Point> batch) override {
     for (const auto& p : batch) {
       for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], double(p[k])), hi[k] = std::max(hi[k], double(p[k]));
-      if (mix(index_++) % stride_ != 0) continue;
+      if (mesh::index_hash(index_++) % stride_ != 0) continue;
       double d = distance_(p);
       sum += d, max = std::max(max, d), ++samples;
     }
@@ -54,11 +55,6 @@ class VertexDistanceSink : public mesh::MeshSink {
   std::array<double, 3> lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
 
  private:
-  static std::uint64_t mix(std::uint64_t x) {  // splitmix64's finalizer: samples spread over the file
-    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-    x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-    return x ^ (x >> 31);
-  }
   cgal::DistanceToSurface distance_;
   std::size_t max_samples_;
   std::uint64_t stride_ = 1, index_ = 0;
