@@ -85,7 +85,7 @@ TEST(Partition, EveryTriangleOnceSharedFlagsAndAdjacencyConsistent) {
     for (std::size_t v = 0; v < part.positions.size(); ++v) {
       ASSERT_LT(part.global_ids[v], input.positions.size());
       EXPECT_EQ(part.positions[v], input.positions[part.global_ids[v]]);
-      parts_of[part.global_ids[v]].emplace_back(p, part.shared[v]);
+      parts_of[part.global_ids[v]].emplace_back(p, part.shared(v));
     }
     for (const auto& t : part.triangles)
       seen[{mesh::Index(part.global_ids[t[0]]), mesh::Index(part.global_ids[t[1]]), mesh::Index(part.global_ids[t[2]])}]++;
@@ -194,7 +194,7 @@ TEST(PartSimplify, KeepsSharedVerticesInPlace) {
   std::map<std::uint64_t, mesh::Point> kept;
   for (std::size_t v = 0; v < out.positions.size(); ++v) kept[out.global_ids[v]] = out.positions[v];
   for (std::size_t v = 0; v < in.positions.size(); ++v)
-    if (in.shared[v]) {
+    if (in.shared(v)) {
       ASSERT_TRUE(kept.count(in.global_ids[v])) << "shared vertex " << in.global_ids[v] << " removed";
       EXPECT_EQ(kept[in.global_ids[v]], in.positions[v]);
     }
@@ -269,7 +269,7 @@ TEST(PartFiles, RoundTripAndRefuseDamage) {
   mesh::PartFile part;
   part.global_ids = {3, 9, 12};
   part.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
-  part.shared = {1, 0, 1};
+  part.partner = {4, mesh::kNotShared, mesh::kSharedBy3};
   part.triangles = {{0, 1, 2}};
   auto bytes = mesh::encode_part(part);
   mesh::PartFile back = mesh::decode_part(bytes, "p.mfp");
