@@ -129,6 +129,29 @@ services::PartStats simplify_one_part(const std::string& dir, std::size_t p, dou
     if (std::filesystem::exists(in)) seams.incoming.push_back(mesh::read_rem(in));
     else seams.unsimplified.push_back(q);
   }
+  // The later neighbours' sides of the seams, for the checks of the half-edge collapses there
+  // (their triangles at the shared vertices only).
+  for (std::uint32_t q : seams.unsimplified) {
+    const mesh::PartFile other = mesh::read_part(part_path(dir, q, false));
+    mesh::PartFile near;
+    std::vector<mesh::Index> renumber(other.positions.size(), ~mesh::Index{0});
+    for (const mesh::Triangle& t : other.triangles) {
+      if (other.partner[t[0]] != p && other.partner[t[1]] != p && other.partner[t[2]] != p) continue;
+      mesh::Triangle kept;
+      for (int k = 0; k < 3; ++k) {
+        mesh::Index& id = renumber[t[k]];
+        if (id == ~mesh::Index{0}) {
+          id = static_cast<mesh::Index>(near.positions.size());
+          near.global_ids.push_back(other.global_ids[t[k]]);
+          near.positions.push_back(other.positions[t[k]]);
+          near.partner.push_back(other.partner[t[k]]);
+        }
+        kept[k] = id;
+      }
+      near.triangles.push_back(kept);
+    }
+    seams.unsimplified_parts.push_back(std::move(near));
+  }
   for (const mesh::RemFile& rem : seams.incoming)
     if (rem.from >= info.parts || rem.to != p) throw InvalidInput(rem_path(dir, rem.from, p) + ": names parts " +
                                                                   std::to_string(rem.from) + " -> " + std::to_string(rem.to));

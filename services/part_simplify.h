@@ -30,6 +30,10 @@ struct PartSeams {
   std::uint32_t part = 0;                 // this part's number
   std::vector<mesh::RemFile> incoming;    // from the simplified neighbours (to == part)
   std::vector<std::uint32_t> unsimplified;  // neighbours still to come: one Rem file each out
+  // Optional, in the order of `unsimplified`: their part files as partitioned, so that a
+  // collapse on a seam is checked on the neighbour's side too (link condition, no flipped
+  // triangle); only their triangles at the vertices shared with this part are used.
+  std::vector<mesh::PartFile> unsimplified_parts;
 };
 
 // \throws InvalidInput when max_error_abs <= 0, or when a Rem file does not fit the part.

@@ -558,6 +558,8 @@ class Simplifier {
         if (la <= 1e-12 * lb || la == 0) return false;
         if (dot(before, after) <= 0.2 * std::sqrt(lb * la)) return false;  // > ~78 degrees turn
       }
+    const bool seam = partner_ && partner_[drop] != kNoPartner;
+    if (seam && params_.seam_side && !params_.seam_side->allows(drop, keep, common[0], nk, nd)) return false;
     // Apply.
     for (Index t : shared) {
       tri_alive_[t] = false;
@@ -570,6 +572,7 @@ class Simplifier {
     pos_[keep] = to_float(position);
     quadric_[keep] += quadric_[drop];
     boundary_[keep] = boundary_[keep] || boundary_[drop];
+    if (seam && params_.seam_side) params_.seam_side->collapsed(drop, keep);
     // Only the edges at `keep` changed cost; the old entries are dropped when they surface.
     push_edges_of(keep);
     return true;

@@ -20,6 +20,18 @@
 
 namespace meshflow::services {
 
+// The other side of a seam, which the mesh being simplified does not hold (parallel/: the
+// partner part). Asked before each half-edge collapse of a seam vertex (SimplifyParams::
+// seam_partner), with the apex of the edge's triangle here and the sorted neighbours of both
+// ends here; told after each one made.
+class SeamSide {
+ public:
+  virtual ~SeamSide() = default;
+  virtual bool allows(mesh::Index drop, mesh::Index keep, mesh::Index apex, const std::vector<mesh::Index>& keep_neighbours,
+                      const std::vector<mesh::Index>& drop_neighbours) = 0;
+  virtual void collapsed(mesh::Index drop, mesh::Index keep) = 0;
+};
+
 struct SimplifyParams {
   double max_error = 0;             // absolute distance; 0: no error stop
   std::size_t target_vertices = 0;  // 0: no vertex target
@@ -39,6 +51,7 @@ struct SimplifyParams {
   // edge from it to any other vertex keeps it, in place. Each such removal is logged in
   // SimplifyResult::seam_collapses.
   const std::vector<std::uint32_t>* seam_partner = nullptr;
+  SeamSide* seam_side = nullptr;  // with seam_partner: the partner's side, consulted
   // Merges replayed before simplifying: per vertex, the vertex it was merged into (itself if
   // none; final targets, no chains). Triangles are renamed, the degenerate ones dropped, and a
   // merged vertex's quadric goes to its target.
