@@ -385,6 +385,22 @@ TEST(RemFiles, ReplayKeepsCommonBoundariesEqualAndMatchesSingleNode) {
   }
 }
 
+// Many small parts (128 on a 200k sphere): each half-edge collapse on a seam is checked on the
+// neighbour's side too; without that, two parts' collapses made a non-manifold edge here.
+TEST(RemFiles, ManySmallPartsStayManifold) {
+  meshflow::testing::TempDir dir;
+  std::string in = generated(dir, mesh::Shape::Sphere, 200000);
+  DistributedParams params;
+  params.max_error_percent = 0.1, params.vertices_per_part = 1000, params.workers = 2;
+  params.parts_dir = dir.file("parts");
+  DistributedReport report = simplify_distributed(in, dir.file("out.ply"), params);
+  EXPECT_GE(report.partition.parts, 100u);
+  auto d = mesh::compute_measures(mesh::read_mesh(dir.file("out.ply")));
+  EXPECT_TRUE(d.is_manifold);
+  EXPECT_TRUE(d.is_watertight);
+  EXPECT_EQ(d.components, 1u);
+}
+
 TEST(RemFiles, RoundTripAndRefuseDamageNamingTheByte) {
   mesh::RemFile rem{2, 5, {{10, 11}, {12, 11}, {11, 13}}};
   std::vector<std::uint8_t> bytes = mesh::encode_rem(rem);
