@@ -44,7 +44,11 @@ fuzz: deps
 	    --parts-dir $(FUZZ_BUILD)/tests/fuzz/corpus-work/part >/dev/null 2>&1 || true; \
 	fi
 	@# Regression: an empty part with its quadric flag set (once crashed fuzz_part's round trip).
-	@printf 'MFPART1\n%016d\001' 0 | tr 0 '\000' > $(FUZZ_BUILD)/tests/fuzz/corpus-work/part/regression-empty-quadric-flag
+	@printf 'MFPART2\n%016d\001' 0 | tr 0 '\000' > $(FUZZ_BUILD)/tests/fuzz/corpus-work/part/regression-empty-quadric-flag
+	@# A Rem file seed: parts 0 -> 1, two merges (5 -> 7, then 7 -> 9).
+	@mkdir -p $(FUZZ_BUILD)/tests/fuzz/corpus-work/rem
+	@printf 'MFREM01\n\000\000\000\000\001\000\000\000\002\000\000\000\000\000\000\000\005\000\000\000\000\000\000\000\007\000\000\000\000\000\000\000\007\000\000\000\000\000\000\000\011\000\000\000\000\000\000\000' \
+	  > $(FUZZ_BUILD)/tests/fuzz/corpus-work/rem/seed-two-merges
 	tests/fuzz/run.sh $(FUZZ_BUILD)/tests/fuzz $(FUZZ_SECONDS)
 
 up: build

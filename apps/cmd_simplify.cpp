@@ -28,6 +28,7 @@ struct SimplifyArgs {
   std::string nodes;
   std::string parts_dir;
   bool progress = false;
+  bool fixed_seams = false;
 };
 
 // A bar on stderr when it is a terminal (or with --progress).
@@ -53,9 +54,12 @@ void add_simplify_command(CLI::App& app, int& exit_status) {
   cmd->add_option("--report", args->report, "Write parts, independent sets and per-step timings here (JSON)");
   cmd->add_option("--parts-dir", args->parts_dir, "Keep the part files here (default: a temporary folder beside OUT)");
   cmd->add_flag("--progress", args->progress, "Progress bar on stderr even when it is not a terminal");
+  cmd->add_flag("--fixed-seams", args->fixed_seams,
+                "Local workers keep every shared vertex fixed (no Rem files; the seam pass alone simplifies the seams)");
   cmd->callback([args, &exit_status] {
     if (!(args->max_error > 0)) throw InvalidInput("--max-error must be > 0 (% of the diagonal)");
     parallel::DistributedParams params;
+    params.fixed_seams = args->fixed_seams;
     params.max_error_percent = args->max_error;
     params.vertices_per_part = args->vertices_per_part;
     params.workers = args->workers ? args->workers : std::max(1u, std::thread::hardware_concurrency());
@@ -134,18 +138,21 @@ void add_merge_command(CLI::App& app, int& exit_status) {
   });
 }
 
-// The worker process of `simplify`: one part file in, its simplified part file out.
+// The worker process of `simplify`: one part file and its incoming Rem files in, its simplified
+// part file and its outgoing Rem files out (DIR/rem-<from>-<to>.bin).
 void add_part_simplify_command(CLI::App& app, int& exit_status) {
   auto dir = std::make_shared<std::string>();
   auto part = std::make_shared<std::size_t>(0);
   auto max_error = std::make_shared<double>(0);
-  CLI::App* cmd = app.add_subcommand("part-simplify", "Worker of simplify: DIR/part-P.mfp -> DIR/part-P.simplified.mfp");
+  auto fixed = std::make_shared<bool>(false);
+  CLI::App* cmd = app.add_subcommand("part-simplify", "Worker of simplify: DIR/part-P.mfp and DIR/rem-*-P.bin -> DIR/part-P.simplified.mfp and DIR/rem-P-*.bin");
   cmd->add_option("DIR", *dir, "Parts directory")->required();
   cmd->add_option("P", *part, "Part number")->required();
   cmd->add_option("--max-error-abs", *max_error, "Maximum RMS error, absolute")->required();
-  cmd->callback([dir, part, max_error, &exit_status] {
+  cmd->add_flag("--fixed-seams", *fixed, "Keep every shared vertex fixed; no Rem files read or written");
+  cmd->callback([dir, part, max_error, fixed, &exit_status] {
     if (*max_error <= 0) throw InvalidInput("--max-error-abs must be > 0");
-    std::printf("%s\n", parallel::simplify_one_part(*dir, *part, *max_error).to_json().c_str());
+    std::printf("%s\n", parallel::simplify_one_part(*dir, *part, *max_error, *fixed).to_json().c_str());
     exit_status = 0;
   });
 }

@@ -1,9 +1,11 @@
 #include "mesh/part_files.h"
 
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <sstream>
+#include <unordered_set>
 
 #include "mesh/errors.h"
 #include "mesh/mesh_io.h"
@@ -11,7 +13,8 @@
 namespace meshflow::mesh {
 namespace {
 
-constexpr char kMagic[8] = {'M', 'F', 'P', 'A', 'R', 'T', '1', '\n'};
+constexpr char kMagic[8] = {'M', 'F', 'P', 'A', 'R', 'T', '2', '\n'};
+constexpr char kRemMagic[8] = {'M', 'F', 'R', 'E', 'M', '0', '1', '\n'};
 
 template <typename T>
 void put(std::vector<std::uint8_t>& out, const T& value) {
@@ -33,9 +36,11 @@ class Cursor {
   void need(std::uint64_t n, const char* what) const {
     if (n > bytes_.size() - at_) fail(std::string("unexpected end of file: expected ") + what);
   }
-  [[noreturn]] void fail(const std::string& reason) const {
-    throw ParseError({.file = name_, .line = {}, .column = {}, .byte_offset = at_}, reason);
+  [[noreturn]] void fail(const std::string& reason) const { fail_at(at_, reason); }
+  [[noreturn]] void fail_at(std::size_t offset, const std::string& reason) const {
+    throw ParseError({.file = name_, .line = {}, .column = {}, .byte_offset = offset}, reason);
   }
+  std::size_t offset() const { return at_; }
   std::size_t remaining() const { return bytes_.size() - at_; }
 
  private:
@@ -49,7 +54,7 @@ class Cursor {
 std::vector<std::uint8_t> encode_part(const PartFile& part) {
   const bool quadrics = !part.quadrics.empty();
   std::vector<std::uint8_t> out;
-  out.reserve(25 + part.positions.size() * (8 + 12 + 1 + (quadrics ? 88 : 0)) + part.triangles.size() * 12);
+  out.reserve(25 + part.positions.size() * (8 + 12 + 4 + (quadrics ? 88 : 0)) + part.triangles.size() * 12);
   out.assign(kMagic, kMagic + 8);
   put<std::uint64_t>(out, part.positions.size());
   put<std::uint64_t>(out, part.triangles.size());
@@ -57,7 +62,7 @@ std::vector<std::uint8_t> encode_part(const PartFile& part) {
   for (std::size_t v = 0; v < part.positions.size(); ++v) {
     put(out, part.global_ids[v]);
     for (float c : part.positions[v]) put(out, c);
-    put<std::uint8_t>(out, part.shared[v]);
+    put<std::uint32_t>(out, part.partner[v]);
     if (quadrics)
       for (double q : part.quadrics[v]) put(out, q);
   }
@@ -70,14 +75,16 @@ PartFile decode_part(std::span<const std::uint8_t> bytes, const std::string& nam
   Cursor in(bytes, name);
   char magic[8];
   for (char& c : magic) c = static_cast<char>(in.get<std::uint8_t>("the part header"));
-  if (std::memcmp(magic, kMagic, 8) != 0) in.fail("not a meshflow part file (expected \"MFPART1\")");
+  if (std::memcmp(magic, kMagic, 6) == 0 && magic[6] == '1' && magic[7] == '\n')
+    in.fail_at(0, "a part file of an older format (MFPART1): partition the mesh again");
+  if (std::memcmp(magic, kMagic, 8) != 0) in.fail_at(0, "not a meshflow part file (expected \"MFPART2\")");
   auto vertices = in.get<std::uint64_t>("the vertex count");
   auto triangles = in.get<std::uint64_t>("the triangle count");
   auto has_quadrics = in.get<std::uint8_t>("the quadric flag");
   if (has_quadrics > 1) in.fail("quadric flag must be 0 or 1");
   // The encoder sets the flag exactly when there are quadrics, so an empty part never has it.
   if (has_quadrics && vertices == 0) in.fail("quadric flag set on a part without vertices");
-  const std::uint64_t vertex_bytes = 8 + 12 + 1 + (has_quadrics ? 88 : 0);
+  const std::uint64_t vertex_bytes = 8 + 12 + 4 + (has_quadrics ? 88 : 0);
   // Both counts must fit the bytes left before anything is allocated.
   if (vertices > in.remaining() / vertex_bytes || triangles > in.remaining() / 12 ||
       vertices * vertex_bytes + triangles * 12 != in.remaining())
@@ -87,14 +94,15 @@ PartFile decode_part(std::span<const std::uint8_t> bytes, const std::string& nam
   PartFile part;
   part.global_ids.resize(vertices);
   part.positions.resize(vertices);
-  part.shared.resize(vertices);
+  part.partner.resize(vertices);
   if (has_quadrics) part.quadrics.resize(vertices);
   for (std::uint64_t v = 0; v < vertices; ++v) {
     part.global_ids[v] = in.get<std::uint64_t>("a global vertex id");
     if (v > 0 && part.global_ids[v] <= part.global_ids[v - 1]) in.fail("global vertex ids must ascend");
     for (float& c : part.positions[v]) c = in.get<float>("a coordinate");
-    part.shared[v] = in.get<std::uint8_t>("a shared flag");
-    if (part.shared[v] > 1) in.fail("shared flag must be 0 or 1");
+    part.partner[v] = in.get<std::uint32_t>("a partner part");
+    if (part.partner[v] >= kMaxParts && part.partner[v] != kNotShared && part.partner[v] != kSharedBy3)
+      in.fail("partner " + std::to_string(part.partner[v]) + " is neither a part (< 2^24) nor a shared flag");
     if (has_quadrics)
       for (double& q : part.quadrics[v]) q = in.get<double>("a quadric");
   }
@@ -117,6 +125,56 @@ void write_part(const PartFile& part, const std::string& path) {
 PartFile read_part(const std::string& path) {
   return decode_part(read_file_bytes(path), path);
 }
+
+std::vector<std::uint8_t> encode_rem(const RemFile& rem) {
+  std::vector<std::uint8_t> out(kRemMagic, kRemMagic + 8);
+  out.reserve(24 + 16 * rem.merges.size());
+  put(out, rem.from);
+  put(out, rem.to);
+  put<std::uint64_t>(out, rem.merges.size());
+  for (const auto& [removed, kept] : rem.merges) put(out, removed), put(out, kept);
+  return out;
+}
+
+RemFile decode_rem(std::span<const std::uint8_t> bytes, const std::string& name) {
+  Cursor in(bytes, name);
+  char magic[8];
+  for (char& c : magic) c = static_cast<char>(in.get<std::uint8_t>("the Rem file header"));
+  if (std::memcmp(magic, kRemMagic, 8) != 0) in.fail_at(0, "not a meshflow Rem file (expected \"MFREM01\")");
+  RemFile rem;
+  rem.from = in.get<std::uint32_t>("the part it comes from");
+  rem.to = in.get<std::uint32_t>("the part it goes to");
+  if (rem.from >= kMaxParts || rem.to >= kMaxParts || rem.from == rem.to)
+    in.fail_at(8, "parts " + std::to_string(rem.from) + " -> " + std::to_string(rem.to) + " are not two parts (< 2^24)");
+  const auto count = in.get<std::uint64_t>("the merge count");
+  if (count > in.remaining() / 16 || count * 16 != in.remaining())
+    in.fail("count (" + std::to_string(count) + " merges) does not match the " + std::to_string(in.remaining()) +
+            " bytes that follow");
+  rem.merges.resize(count);
+  std::unordered_set<std::uint64_t> removed;
+  removed.reserve(count);
+  for (auto& [gone, kept] : rem.merges) {
+    const std::size_t at = in.offset();
+    gone = in.get<std::uint64_t>("a removed vertex");
+    kept = in.get<std::uint64_t>("a kept vertex");
+    if (gone == kept) in.fail_at(at, "vertex " + std::to_string(gone) + " merged into itself");
+    if (removed.count(kept)) in.fail_at(at, "vertex " + std::to_string(kept) + " kept after it was removed");
+    if (!removed.insert(gone).second) in.fail_at(at, "vertex " + std::to_string(gone) + " removed twice");
+  }
+  return rem;
+}
+
+void write_rem(const RemFile& rem, const std::string& path) {
+  std::vector<std::uint8_t> bytes = encode_rem(rem);
+  {
+    std::ofstream out(path + ".tmp", std::ios::binary);
+    out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+    if (!out) throw IoError(path + ": cannot write the Rem file");
+  }
+  std::filesystem::rename(path + ".tmp", path);
+}
+
+RemFile read_rem(const std::string& path) { return decode_rem(read_file_bytes(path), path); }
 
 std::string encode_parts_index(const PartsIndex& index) {
   std::ostringstream out;

@@ -3,11 +3,14 @@
 //   partition (parallel/partition.h) -> per-part step (services/part_simplify.h) on local
 //   worker processes, threads or mesh nodes (parallel/node_dispatch.h), the parts taken in the
 //   order of their independent sets -> seam pass and merge into one PLY (parallel/merge.h).
-// Not the thesis's scheme (Rem files, boundary half-edge collapses): each part keeps its shared
-// vertices fixed and a seam pass simplifies a band around the seams afterwards, with the
-// parts' quadrics. That keeps the error within a few % of a single-node run, which the thesis
-// scheme does not (its Table 9.3), and makes the parts independent: any order, any node count,
-// the same result.
+// Local workers follow the thesis's scheme (Rem files, ch. 9): parts go in the order of their
+// independent sets, a part starting once its earlier neighbours are done; each replays what its
+// simplified neighbours removed on their common boundaries (DIR/rem-<from>-<to>.bin), keeps the
+// vertices shared by 3+ parts or with a simplified neighbour, half-edge-collapses along its
+// boundaries with later neighbours and writes what it removed there for them. The seam pass
+// then simplifies a band around what stayed fixed (mostly near 3+ vertices). The order does
+// not depend on the worker count, so neither does the result. Nodes (a PartRunner) still keep
+// every shared vertex fixed, and the seam pass does the seams.
 
 #include <cstddef>
 #include <functional>
@@ -23,7 +26,8 @@
 
 namespace meshflow::parallel {
 
-// Runs the per-part step on part p: DIR/part-<p>.mfp -> DIR/part-<p>.simplified.mfp.
+// Runs the per-part step on part p: DIR/part-<p>.mfp -> DIR/part-<p>.simplified.mfp, shared
+// vertices fixed (no Rem files).
 using PartRunner = std::function<services::PartStats(std::size_t p, double max_error_abs)>;
 
 struct DistributedParams {
@@ -36,6 +40,7 @@ struct DistributedParams {
   // --max-error-abs X` if worker_executable is set, else a thread of this process.
   PartRunner runner;
   std::string worker_executable;
+  bool fixed_seams = false;  // local workers too keep every shared vertex fixed (no Rem files)
   std::function<void(const std::string& step, double fraction)> progress;
 };
 
@@ -51,10 +56,13 @@ struct DistributedReport {
 // The stats a part-simplify process or a node answered (zeros for what is missing).
 services::PartStats stats_from_json(const nlohmann::json& stats);
 
-// The per-part step in this process (a worker thread, or `meshflow part-simplify`).
-services::PartStats simplify_one_part(const std::string& dir, std::size_t p, double max_error_abs);
+// The per-part step in this process (a worker thread, or `meshflow part-simplify`), Rem scheme:
+// reads DIR/partition.txt and the Rem files for p, writes p's Rem files then its simplified part.
+// With fixed_seams: every shared vertex fixed, no Rem file read or written.
+services::PartStats simplify_one_part(const std::string& dir, std::size_t p, double max_error_abs, bool fixed_seams = false);
 
-// Every part, `params.workers` at a time, in the order of the independent sets.
+// Every part, `params.workers` at a time, in the order of the independent sets (Rem files of an
+// earlier run in the directory are removed first).
 void simplify_parts(const DistributedParams& params, DistributedReport& report);
 
 // The three steps: IN -> OUT (canonical PLY; another extension is converted at the end).

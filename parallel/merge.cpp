@@ -32,7 +32,8 @@ struct Band {
 Band seam_band(const mesh::PartFile& part) {
   const std::size_t V = part.positions.size(), T = part.triangles.size();
   Band b{std::vector<std::uint8_t>(T, 0), std::vector<std::uint8_t>(V, 0)};
-  std::vector<std::uint8_t> near(part.shared.begin(), part.shared.end());
+  std::vector<std::uint8_t> near(V, 0);
+  for (std::size_t v = 0; v < V; ++v) near[v] = part.shared(v);
   for (int ring = 0; ring < kSeamRings; ++ring) {
     for (std::size_t t = 0; t < T; ++t)
       for (Index v : part.triangles[t])
@@ -45,6 +46,45 @@ Band seam_band(const mesh::PartFile& part) {
     for (Index v : part.triangles[t]) b.vertex[v] |= b.triangle[t] ? 1 : 2;
   // vertex: 0 unused, 1 band only, 2 kept only, 3 both (locked in the band)
   return b;
+}
+
+// Two triangles on the same three vertices with opposite orientations: a fin, left where the
+// half-edge collapses of two parts' Rem files closed a seam loop of three edges (each part saw
+// only its own side). A collapse done in one piece would have removed both; so does this.
+std::size_t remove_fins(std::vector<mesh::Triangle>& triangles) {
+  auto key = [](const mesh::Triangle& t) {
+    std::array<Index, 3> k = t;
+    std::sort(k.begin(), k.end());
+    return k;
+  };
+  std::vector<std::uint32_t> order(triangles.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<std::uint32_t>(i);
+  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return key(triangles[a]) < key(triangles[b]); });
+  // Orientation: the cyclic order, as a rotation to the smallest vertex first.
+  auto rotated = [](const mesh::Triangle& t) {
+    int m = t[0] < t[1] ? (t[0] < t[2] ? 0 : 2) : (t[1] < t[2] ? 1 : 2);
+    return std::array<Index, 3>{t[m], t[(m + 1) % 3], t[(m + 2) % 3]};
+  };
+  std::vector<std::uint8_t> gone(triangles.size(), 0);
+  std::size_t pairs = 0;
+  for (std::size_t i = 0; i < order.size();) {
+    std::size_t j = i;
+    while (j < order.size() && key(triangles[order[j]]) == key(triangles[order[i]])) ++j;
+    for (std::size_t a = i; a < j; ++a)
+      for (std::size_t b = a + 1; b < j && !gone[order[a]]; ++b)
+        if (!gone[order[b]] && rotated(triangles[order[a]]) != rotated(triangles[order[b]])) {
+          gone[order[a]] = gone[order[b]] = 1;
+          ++pairs;
+        }
+    i = j;
+  }
+  if (pairs) {
+    std::size_t n = 0;
+    for (std::size_t t = 0; t < triangles.size(); ++t)
+      if (!gone[t]) triangles[n++] = triangles[t];
+    triangles.resize(n);
+  }
+  return pairs;
 }
 
 mesh::PartFile load_simplified(const std::string& dir, std::size_t p) {
@@ -110,10 +150,10 @@ MergeReport merge_parts(const std::string& dir, std::size_t parts, double max_er
       if (added) {
         band.positions.push_back(part.positions[v]);
         quadrics.push_back(part.quadrics[v]);
-        band_seam.push_back(part.shared[v]);
+        band_seam.push_back(part.shared(v));
         band_locked.push_back(b.vertex[v] == 3);
       } else {
-        if (!part.shared[v]) throw InvalidInput(part_path(dir, p, true) + ": vertex " + std::to_string(part.global_ids[v]) +
+        if (!part.shared(v)) throw InvalidInput(part_path(dir, p, true) + ": vertex " + std::to_string(part.global_ids[v]) +
                                                 " is in two parts but not flagged shared");
         for (int k = 0; k < 11; ++k) quadrics[it->second][k] += part.quadrics[v][k];
         if (b.vertex[v] == 3) band_locked[it->second] = true;
@@ -127,6 +167,7 @@ MergeReport merge_parts(const std::string& dir, std::size_t parts, double max_er
     }
     if (progress) progress("seams", 0.3 * double(p + 1) / double(parts));
   }
+  report.fins_removed = remove_fins(band.triangles);
   report.band_vertices = band.positions.size();
   report.band_triangles = band.triangles.size();
 

@@ -22,6 +22,7 @@ inline constexpr int kSeamRings = 2;
 
 struct MergeReport {
   std::size_t band_vertices = 0, band_triangles = 0;
+  std::size_t fins_removed = 0;  // pairs of band triangles on the same three vertices, facing apart
   std::uint64_t output_vertices = 0, output_triangles = 0;
   double seams_seconds = 0, merge_seconds = 0;
 };

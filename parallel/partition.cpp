@@ -36,7 +36,7 @@ struct RequestRecord {  // cell `from` needs a copy of vertex gid
 struct CopyRecord {  // the answer: a foreign vertex for the requesting cell
   std::uint32_t gid;
   float p[3];
-  std::uint32_t shared;
+  std::uint32_t partner;  // for the requesting part (mesh::PartFile::partner)
 };
 
 // Pass 1: bounding box and sample. A vertex is sampled when a hash of its index is a multiple of
@@ -159,6 +159,10 @@ std::string part_path(const std::string& dir, std::size_t p, bool simplified) {
   return dir + "/part-" + std::to_string(p) + (simplified ? ".simplified.mfp" : ".mfp");
 }
 
+std::string rem_path(const std::string& dir, std::size_t from, std::size_t to) {
+  return dir + "/rem-" + std::to_string(from) + "-" + std::to_string(to) + ".bin";
+}
+
 PartitionInfo partition_file(const std::string& input, std::size_t vertices_per_part, const std::string& dir,
                              const std::function<void(double)>& progress) {
   if (vertices_per_part == 0) throw InvalidInput("--vertices-per-part must be at least 1");
@@ -216,8 +220,14 @@ PartitionInfo partition_file(const std::string& input, std::size_t vertices_per_
         if (used[at]) users.push_back(part_of_cell[c]);
         for (std::size_t k = i; k < j; ++k) users.push_back(part_of_cell[requests[k].from]);
         const bool shared = users.size() >= 2;
-        for (std::size_t k = i; k < j; ++k)
-          copies.add(requests[k].from, {requests[i].gid, {own[at].p[0], own[at].p[1], own[at].p[2]}, shared});
+        for (std::size_t k = i; k < j; ++k) {
+          // The requester's partner: the one other user, or the 3+ flag.
+          const std::uint32_t me = part_of_cell[requests[k].from];
+          const std::uint32_t partner = users.size() < 2 ? mesh::kNotShared
+                                        : users.size() > 2 ? mesh::kSharedBy3
+                                                           : (users[0] == me ? users[1] : users[0]);
+          copies.add(requests[k].from, {requests[i].gid, {own[at].p[0], own[at].p[1], own[at].p[2]}, partner});
+        }
         if (shared) {
           ++info.shared_vertices;
           if (users.size() >= 3) ++info.shared_by_3_or_more;
@@ -241,18 +251,21 @@ PartitionInfo partition_file(const std::string& input, std::size_t vertices_per_
       auto tris = load_records<TriangleRecord>(scratch + "/T-" + id);
       const GidIndex own_index = index_of(own);
       auto used = referenced(own_index, own.size(), tris);
-      std::vector<std::uint8_t> requested(own.size(), 0);
+      // An own vertex requested by one other part has it as partner; by two or more, the 3+ flag.
+      std::vector<std::uint32_t> partner(own.size(), mesh::kNotShared);
       for (const auto& r : load_records<RequestRecord>(scratch + "/R-" + id)) {
         std::size_t at = own_index.find(r.gid);
         if (at == GidIndex::npos) throw std::logic_error("partition: a requested vertex is not in its cell's file");
-        requested[at] = 1;
+        const std::uint32_t from = part_of_cell[r.from];
+        if (partner[at] == mesh::kNotShared) partner[at] = from;
+        else if (partner[at] != from) partner[at] = mesh::kSharedBy3;
       }
       auto copies = load_records<CopyRecord>(scratch + "/F-" + id);
       std::sort(copies.begin(), copies.end(), [](const CopyRecord& a, const CopyRecord& b) { return a.gid < b.gid; });
       mesh::PartFile part;
       part.global_ids.reserve(own.size() + copies.size());
       part.positions.reserve(own.size() + copies.size());
-      part.shared.reserve(own.size() + copies.size());
+      part.partner.reserve(own.size() + copies.size());
       std::size_t i = 0, k = 0;
       while (i < own.size() || k < copies.size()) {
         if (i < own.size() && !used[i]) {
@@ -262,12 +275,12 @@ PartitionInfo partition_file(const std::string& input, std::size_t vertices_per_
         if (k == copies.size() || (i < own.size() && own[i].gid < copies[k].gid)) {
           part.global_ids.push_back(own[i].gid);
           part.positions.push_back({own[i].p[0], own[i].p[1], own[i].p[2]});
-          part.shared.push_back(requested[i]);
+          part.partner.push_back(partner[i]);
           ++i;
         } else {
           part.global_ids.push_back(copies[k].gid);
           part.positions.push_back({copies[k].p[0], copies[k].p[1], copies[k].p[2]});
-          part.shared.push_back(copies[k].shared ? 1 : 0);
+          part.partner.push_back(copies[k].partner);
           ++k;
         }
       }

@@ -43,5 +43,7 @@ void write_partition_info(const std::string& dir, const PartitionInfo& info);
 PartitionInfo read_partition_info(const std::string& dir);
 
 std::string part_path(const std::string& dir, std::size_t p, bool simplified);
+// DIR/rem-<from>-<to>.bin: what part `from` removed on its boundary with `to` (mesh::RemFile).
+std::string rem_path(const std::string& dir, std::size_t from, std::size_t to);
 
 }  // namespace meshflow::parallel

@@ -186,17 +186,20 @@ class Simplifier {
     pos_ = input.positions;
     tris_ = input.triangles;
     tri_alive_.assign(tris_.size(), true);
+    quadric_.resize(V);
+    if (params_.merged_into) replay_merges(*params_.merged_into);
     std::vector<bool> degenerate(tris_.size(), false);
     for (std::size_t t = 0; t < tris_.size(); ++t) {
       const auto& tri = tris_[t];
-      if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) {
+      if (!tri_alive_[t]) {
+        degenerate[t] = true;  // gone with a merge
+      } else if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) {
         // Degenerate by index: kept as is, its vertices locked.
         for (Index v : tri) locked_.push_back(v);
         degenerate[t] = true;
       }
     }
     vt_ = VertexFans(tris_, V, degenerate);
-    quadric_.resize(V);
     boundary_.assign(V, false);
     std::vector<bool> lock(V, false);
     for (Index v : locked_) lock[v] = true;
@@ -205,14 +208,27 @@ class Simplifier {
     if (params_.locked)
       for (std::size_t v = 0; v < V && v < params_.locked->size(); ++v)
         if ((*params_.locked)[v]) fixed_[v] = true;
+    if (params_.seam_partner) {
+      if (params_.seam_partner->size() != V) throw InvalidInput("Simplify: one seam partner per vertex is needed");
+      partner_ = params_.seam_partner->data();
+    }
     alive_.assign(V, false);
     for (std::size_t v = 0; v < V; ++v) alive_[v] = !vt_.empty(static_cast<Index>(v));
     version_.assign(V, 0);
     if (params_.quadrics) {
       for (std::size_t v = 0; v < V && v < params_.quadrics->size(); ++v) quadric_[v] = from_array((*params_.quadrics)[v]);
-    } else for (std::size_t t = 0; t < tris_.size(); ++t) {
+    } else if (!params_.merged_into) {
+      add_face_planes();
+    }
+    classify_edges();
+    live_vertices_ = static_cast<std::size_t>(std::count(alive_.begin(), alive_.end(), true));
+  }
+
+  // Each live triangle's plane, weighted by its area, to its corners' quadrics.
+  void add_face_planes() {
+    for (std::size_t t = 0; t < tris_.size(); ++t) {
       const auto& tri = tris_[t];
-      if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) continue;
+      if (!tri_alive_[t] || tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) continue;
       Vec n = cross(sub(at(tri[1]), at(tri[0])), sub(at(tri[2]), at(tri[0])));
       double len = std::sqrt(dot(n, n));
       if (len == 0) continue;
@@ -223,8 +239,28 @@ class Simplifier {
       q.weight = area;
       for (Index v : tri) quadric_[v] += q;
     }
-    classify_edges();
-    live_vertices_ = static_cast<std::size_t>(std::count(alive_.begin(), alive_.end(), true));
+  }
+
+  // Merges made elsewhere before this run (a neighbour part's Rem file): the quadrics come from
+  // the triangles as they were, a merged vertex's to the one it joined, so that the error
+  // already spent counts; then the triangles are renamed and the degenerate ones dropped.
+  void replay_merges(const std::vector<Index>& root) {
+    const std::size_t V = pos_.size();
+    if (root.size() != V) throw InvalidInput("Simplify: one merge target per vertex is needed");
+    for (std::size_t v = 0; v < V; ++v)
+      if (root[v] >= V || root[root[v]] != root[v]) throw InvalidInput("Simplify: merge targets must be final");
+    add_face_planes();
+    for (std::size_t v = 0; v < V; ++v)
+      if (root[v] != v) {
+        quadric_[root[v]] += quadric_[v];
+        quadric_[v] = {};
+      }
+    for (std::size_t t = 0; t < tris_.size(); ++t) {
+      auto& tri = tris_[t];
+      if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) continue;  // kept as is, below
+      for (Index& v : tri) v = root[v];
+      if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) tri_alive_[t] = false;
+    }
   }
 
   SimplifyResult run() {
@@ -252,6 +288,7 @@ class Simplifier {
         continue;
       }
       if (!collapse(c.keep, c.drop, place.position)) continue;
+      if (partner_ && partner_[c.drop] != kNoPartner) result.seam_collapses.emplace_back(c.drop, c.keep);
       result.collapses++;
       result.max_rms_error = std::max(result.max_rms_error, place.rms);
       if (heap_.size() > compact_at_) compact();
@@ -336,10 +373,13 @@ class Simplifier {
       }
   }
 
+  // Whether v is on a seam between parts: locked by the caller, or free to go to a partner.
+  bool on_seam(Index v) const {
+    return (params_.locked && v < params_.locked->size() && (*params_.locked)[v]) || (partner_ && partner_[v] != kNoPartner);
+  }
+
   bool wants_boundary_plane(Index a, Index b) const {
-    if (params_.locked && a < params_.locked->size() && b < params_.locked->size() && (*params_.locked)[a] &&
-        (*params_.locked)[b])
-      return false;
+    if (on_seam(a) && on_seam(b)) return false;  // a seam, not a border of the surface
     if (params_.quadrics)
       return params_.seam && a < params_.seam->size() && b < params_.seam->size() && (*params_.seam)[a] &&
              (*params_.seam)[b];
@@ -418,6 +458,7 @@ class Simplifier {
   bool evaluate(Index a, Index b, Placement& out) const {
     if (lock_[a] || lock_[b] || (fixed_[a] && fixed_[b])) return false;
     if (a > b) std::swap(a, b);
+    if (partner_ && (partner_[a] != kNoPartner || partner_[b] != kNoPartner)) return evaluate_seam(a, b, out);
     Quadric q = quadric_[a];
     q += quadric_[b];
     bool ba = boundary_[a], bb = boundary_[b];
@@ -454,6 +495,36 @@ class Simplifier {
       if (cost < out.cost) out.cost = cost, out.position = options[i];
     }
     // The planes' own weight (without the boundary constraints' extra) normalises the error.
+    out.rms = q.weight > 0 ? std::sqrt(out.cost / q.weight) : 0;
+    return true;
+  }
+
+  // An edge with a seam end (a < b): a half-edge collapse that leaves the seam end in place; two
+  // seam ends only along the part's border and with the same partner, which will replay it.
+  // Allocates nothing; only called when seam partners are given.
+  bool evaluate_seam(Index a, Index b, Placement& out) const {
+    // A fixed vertex (params.locked) is never removed, and a seam vertex goes only onto another
+    // of the same seam, which the partner holds too.
+    if (fixed_[a] || fixed_[b]) return false;
+    const std::uint32_t pa = partner_[a], pb = partner_[b];
+    Quadric q = quadric_[a];
+    q += quadric_[b];
+    if (pa != kNoPartner && pb != kNoPartner) {
+      if (pa != pb || !is_boundary_edge(a, b)) return false;
+      // The partner's side of the collapse is unseen here (where this part's side may cost
+      // nothing at all, at a vertex with one triangle in the part): it is estimated by the
+      // reverse move's cost, the kept vertex's planes at the removed one.
+      const double ca = q.eval(at(a)) + quadric_[a].eval(at(b)), cb = q.eval(at(b)) + quadric_[b].eval(at(a));
+      if (ca <= cb) out.keep = a, out.drop = b, out.cost = ca;
+      else out.keep = b, out.drop = a, out.cost = cb;
+    } else {
+      out.keep = pa != kNoPartner ? a : b;
+      out.drop = pa != kNoPartner ? b : a;
+      // Both on the border (the seam vertex always is) through the interior: would pinch.
+      if (boundary_[out.drop] && !is_boundary_edge(a, b)) return false;
+      out.cost = q.eval(at(out.keep));
+    }
+    out.position = at(out.keep);
     out.rms = q.weight > 0 ? std::sqrt(out.cost / q.weight) : 0;
     return true;
   }
@@ -504,6 +575,8 @@ class Simplifier {
         if (la <= 1e-12 * lb || la == 0) return false;
         if (dot(before, after) <= 0.2 * std::sqrt(lb * la)) return false;  // > ~78 degrees turn
       }
+    const bool seam = partner_ && partner_[drop] != kNoPartner;
+    if (seam && params_.seam_side && !params_.seam_side->allows(drop, keep, common[0], nk, nd)) return false;
     // Apply.
     for (Index t : shared) {
       tri_alive_[t] = false;
@@ -516,6 +589,7 @@ class Simplifier {
     pos_[keep] = to_float(position);
     quadric_[keep] += quadric_[drop];
     boundary_[keep] = boundary_[keep] || boundary_[drop];
+    if (seam && params_.seam_side) params_.seam_side->collapsed(drop, keep);
     // Only the edges at `keep` changed cost; the old entries are dropped when they surface.
     push_edges_of(keep);
     return true;
@@ -546,6 +620,7 @@ class Simplifier {
   }
 
   const SimplifyParams& params_;
+  const std::uint32_t* partner_ = nullptr;  // params_.seam_partner's, or null
   std::vector<mesh::Point> pos_;  // float32 like the output: a placement is rounded before it is costed
   std::vector<mesh::Triangle> tris_;
   std::vector<bool> tri_alive_, alive_, boundary_;

@@ -13,11 +13,24 @@
 #include <atomic>
 #include <cstddef>
 #include <functional>
+#include <utility>
 #include <vector>
 
 #include "mesh/mesh.h"
 
 namespace meshflow::services {
+
+// The other side of a seam, which the mesh being simplified does not hold (parallel/: the
+// partner part). Asked before each half-edge collapse of a seam vertex (SimplifyParams::
+// seam_partner), with the apex of the edge's triangle here and the sorted neighbours of both
+// ends here; told after each one made.
+class SeamSide {
+ public:
+  virtual ~SeamSide() = default;
+  virtual bool allows(mesh::Index drop, mesh::Index keep, mesh::Index apex, const std::vector<mesh::Index>& keep_neighbours,
+                      const std::vector<mesh::Index>& drop_neighbours) = 0;
+  virtual void collapsed(mesh::Index drop, mesh::Index keep) = 0;
+};
 
 struct SimplifyParams {
   double max_error = 0;             // absolute distance; 0: no error stop
@@ -33,7 +46,20 @@ struct SimplifyParams {
   const std::vector<std::array<double, 11>>* quadrics = nullptr;
   const std::vector<bool>* seam = nullptr;
   bool export_quadrics = false;
+  // The thesis's seams (Rem files, parallel/): per vertex, the one other part a shared vertex
+  // may be removed for (kNoPartner otherwise). Such a vertex only goes by a half-edge collapse
+  // along a border edge onto a neighbour with the same partner, which stays where it is; an
+  // edge from it to any other vertex keeps it, in place. Each such removal is logged in
+  // SimplifyResult::seam_collapses.
+  const std::vector<std::uint32_t>* seam_partner = nullptr;
+  SeamSide* seam_side = nullptr;  // with seam_partner: the partner's side, consulted
+  // Merges replayed before simplifying: per vertex, the vertex it was merged into (itself if
+  // none; final targets, no chains). Triangles are renamed, the degenerate ones dropped, and a
+  // merged vertex's quadric goes to its target.
+  const std::vector<mesh::Index>* merged_into = nullptr;
 };
+
+constexpr std::uint32_t kNoPartner = 0xFFFFFFFFu;
 
 struct SimplifyResult {
   mesh::Mesh output;        // surviving referenced vertices in ascending input id order
@@ -41,6 +67,8 @@ struct SimplifyResult {
   double max_rms_error = 0;  // the largest rms of a collapse made
   std::vector<mesh::Index> source_ids;            // input id of each output vertex
   std::vector<std::array<double, 11>> quadrics;   // of each output vertex, when exported
+  // With seam_partner: (removed, kept) input ids of the half-edge collapses of seam vertices, in order.
+  std::vector<std::pair<mesh::Index, mesh::Index>> seam_collapses;
 };
 
 // \throws InvalidInput when neither a max_error nor a target is given.

@@ -3,6 +3,7 @@
 #include <sys/wait.h>
 
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -67,7 +68,8 @@ TEST(SimplifyCommand, RefusesBadInputClearly) {
 }
 
 // Two real nodes on loopback simplify the parts (POST /parts/simplify); the result is the
-// same as with local worker processes, and with one node as with two.
+// same as with local worker processes keeping every shared vertex fixed as nodes do
+// (--fixed-seams), and with one node as with two.
 TEST(SimplifyCommand, NodesGiveTheSameResultAsLocalWorkers) {
   meshflow::testing::TempDir dir;
   mesh::GenerateParams g;
@@ -81,7 +83,7 @@ TEST(SimplifyCommand, NodesGiveTheSameResultAsLocalWorkers) {
   ASSERT_FALSE(url_a.empty());
   ASSERT_FALSE(url_b.empty());
   const std::string common = dir.file("in.ply") + " --max-error 0.1 --vertices-per-part 3000";
-  Outcome r = run(dir, "simplify " + common + " -o " + dir.file("local.ply") + " --workers 2");
+  Outcome r = run(dir, "simplify " + common + " -o " + dir.file("local.ply") + " --workers 2 --fixed-seams");
   ASSERT_EQ(r.status, 0) << r.err;
   r = run(dir, "simplify " + common + " -o " + dir.file("two.ply") + " --nodes " + url_a + "," + url_b + " --report " + dir.file("r.json"));
   ASSERT_EQ(r.status, 0) << r.err;
@@ -116,6 +118,36 @@ TEST(SimplifyCommand, NodesGiveTheSameResultAsLocalWorkers) {
   EXPECT_EQ(status, "400");
 }
 
+// Local worker processes follow the Rem scheme: each part's outgoing Rem files are in the
+// parts folder, the report counts the shared vertices removed on seams and replayed (the same
+// number: every logged removal has one partner), and 1 or 2 workers give the same mesh.
+TEST(SimplifyCommand, WorkerProcessesExchangeRemFiles) {
+  meshflow::testing::TempDir dir;
+  mesh::GenerateParams g;
+  g.shape = mesh::Shape::Terrain;
+  g.triangles = 30000;
+  mesh::generate_mesh(g, dir.file("in.ply"));
+  const std::string common = dir.file("in.ply") + " --max-error 0.1 --vertices-per-part 3000";
+  for (const char* workers : {"1", "2"}) {
+    Outcome r = run(dir, "simplify " + common + " -o " + dir.file(std::string("w") + workers + ".ply") + " --workers " +
+                             workers + " --report " + dir.file("r.json") + " --parts-dir " + dir.file(std::string("p") + workers));
+    ASSERT_EQ(r.status, 0) << r.err;
+  }
+  EXPECT_TRUE(mesh::read_mesh(dir.file("w1.ply")) == mesh::read_mesh(dir.file("w2.ply")));
+  std::ifstream report(dir.file("r.json"));
+  std::string json((std::istreambuf_iterator<char>(report)), std::istreambuf_iterator<char>());
+  auto number = [&](const std::string& key) {
+    std::size_t at = json.find("\"" + key + "\": ");
+    return at == std::string::npos ? -1L : std::atol(json.c_str() + at + key.size() + 4);
+  };
+  EXPECT_GT(number("shared_removed_by_half_edge_collapses"), 0) << json;
+  EXPECT_EQ(number("shared_removed_by_half_edge_collapses"), number("shared_removed_by_replay")) << json;
+  int rem_files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir.file("p2")))
+    rem_files += entry.path().filename().string().rfind("rem-", 0) == 0;
+  EXPECT_GT(rem_files, 0);
+}
+
 // A node that answers /service.json but drops every /parts/simplify connection: its parts go
 // to the other node; with no other node the run fails naming it.
 TEST(SimplifyCommand, PartsOfANodeThatStopsAnsweringGoElsewhere) {
@@ -141,7 +173,7 @@ s.serve_forever()
   ASSERT_FALSE(stub_url.empty());
   ASSERT_FALSE(node_url.empty());
   const std::string common = dir.file("in.ply") + " --max-error 0.1 --vertices-per-part 2000";
-  Outcome r = run(dir, "simplify " + common + " -o " + dir.file("local.ply") + " --workers 1");
+  Outcome r = run(dir, "simplify " + common + " -o " + dir.file("local.ply") + " --workers 1 --fixed-seams");
   ASSERT_EQ(r.status, 0) << r.err;
   r = run(dir, "simplify " + common + " -o " + dir.file("nodes.ply") + " --nodes " + stub_url + "," + node_url);
   ASSERT_EQ(r.status, 0) << r.err;

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 
 #include "mesh/errors.h"
 #include "mesh/generate.h"
@@ -105,7 +106,7 @@ TEST(Partition, EveryTriangleOnceSharedFlagsAndAdjacencyConsistent) {
     for (std::size_t v = 0; v < part.positions.size(); ++v) {
       ASSERT_LT(part.global_ids[v], input.positions.size());
       EXPECT_EQ(part.positions[v], input.positions[part.global_ids[v]]);
-      parts_of[part.global_ids[v]].emplace_back(p, part.shared[v]);
+      parts_of[part.global_ids[v]].emplace_back(p, part.shared(v));
     }
     for (const auto& t : part.triangles)
       seen[{mesh::Index(part.global_ids[t[0]]), mesh::Index(part.global_ids[t[1]]), mesh::Index(part.global_ids[t[2]])}]++;
@@ -214,7 +215,7 @@ TEST(PartSimplify, KeepsSharedVerticesInPlace) {
   std::map<std::uint64_t, mesh::Point> kept;
   for (std::size_t v = 0; v < out.positions.size(); ++v) kept[out.global_ids[v]] = out.positions[v];
   for (std::size_t v = 0; v < in.positions.size(); ++v)
-    if (in.shared[v]) {
+    if (in.shared(v)) {
       ASSERT_TRUE(kept.count(in.global_ids[v])) << "shared vertex " << in.global_ids[v] << " removed";
       EXPECT_EQ(kept[in.global_ids[v]], in.positions[v]);
     }
@@ -289,7 +290,7 @@ TEST(PartFiles, RoundTripAndRefuseDamage) {
   mesh::PartFile part;
   part.global_ids = {3, 9, 12};
   part.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
-  part.shared = {1, 0, 1};
+  part.partner = {4, mesh::kNotShared, mesh::kSharedBy3};
   part.triangles = {{0, 1, 2}};
   auto bytes = mesh::encode_part(part);
   mesh::PartFile back = mesh::decode_part(bytes, "p.mfp");
@@ -308,6 +309,149 @@ TEST(PartFiles, RoundTripAndRefuseDamage) {
   std::vector<std::uint8_t> empty_with_flag = mesh::encode_part(mesh::PartFile{});
   empty_with_flag.back() = 1;
   EXPECT_THROW(mesh::decode_part(empty_with_flag, "p.mfp"), ParseError);
+}
+
+// Each shared vertex names its partner in every part that has it: the one other part using
+// it, or the 3+ flag; a vertex of one part is not shared.
+TEST(Partition, PartnersAreConsistentOnBothSides) {
+  meshflow::testing::TempDir dir;
+  PartitionInfo info = partition_file(generated(dir, mesh::Shape::Terrain, 80000), 3000, dir.file("parts"));
+  ASSERT_GE(info.parts, 12u);
+  std::map<std::uint64_t, std::vector<std::pair<std::uint32_t, std::uint32_t>>> uses;  // gid -> (part, partner)
+  for (std::uint32_t p = 0; p < info.parts; ++p) {
+    mesh::PartFile part = mesh::read_part(part_path(dir.file("parts"), p, false));
+    for (std::size_t v = 0; v < part.positions.size(); ++v) uses[part.global_ids[v]].emplace_back(p, part.partner[v]);
+  }
+  std::uint64_t pairs = 0, three = 0;
+  for (const auto& [gid, in] : uses) {
+    for (const auto& [p, partner] : in) {
+      if (in.size() == 1) EXPECT_EQ(partner, mesh::kNotShared) << "vertex " << gid;
+      else if (in.size() > 2) EXPECT_EQ(partner, mesh::kSharedBy3) << "vertex " << gid;
+      else EXPECT_EQ(partner, in[0].first == p ? in[1].first : in[0].first) << "vertex " << gid << " in part " << p;
+    }
+    pairs += in.size() == 2, three += in.size() > 2;
+  }
+  EXPECT_GT(pairs, 0u);
+  EXPECT_GT(three, 0u);
+  EXPECT_EQ(pairs + three, info.shared_vertices);
+  EXPECT_EQ(three, info.shared_by_3_or_more);
+}
+
+// The Rem scheme: after the parts (1 or 2 workers), every two adjacent parts have the same
+// surviving shared vertices on their common boundary, the vertices of 3+ parts all survive,
+// seams were simplified (shared vertices removed by half-edge collapses, each replayed once),
+// and the merged result has the components and boundary loops of a single-node Simplify, is
+// manifold, and its error is within 5 % of it; 1 and 2 workers give the same mesh.
+TEST(RemFiles, ReplayKeepsCommonBoundariesEqualAndMatchesSingleNode) {
+  for (mesh::Shape shape : {mesh::Shape::Terrain, mesh::Shape::Sphere}) {
+    SCOPED_TRACE(shape == mesh::Shape::Sphere ? "sphere" : "terrain");
+    meshflow::testing::TempDir dir;
+    std::string in = generated(dir, shape, 200000);
+    Mesh input = mesh::read_mesh(in);
+    double max_error = 0.0005 * mesh::bounding_box(input).diagonal();
+    Mesh single = services::simplify(input, {.max_error = max_error}).output;
+    auto s = mesh::compute_measures(single);
+    double single_error = services::compare(input, single).mean_ab;
+    Mesh first;
+    for (unsigned workers : {1u, 2u}) {
+      SCOPED_TRACE(workers);
+      DistributedParams params;
+      params.max_error_percent = 0.05, params.vertices_per_part = 8000, params.workers = workers;
+      params.parts_dir = dir.file("parts" + std::to_string(workers));
+      DistributedReport report = simplify_distributed(in, dir.file("out.ply"), params);
+      ASSERT_GE(report.partition.parts, 12u);
+      std::size_t removed = 0, replayed = 0;
+      for (const auto& st : report.part_stats) removed += st.seam_removed, replayed += st.replayed;
+      EXPECT_GT(removed, 100u) << "the seams were not simplified";
+      EXPECT_EQ(removed, replayed);
+      // Common boundaries, from the part files.
+      const std::size_t P = report.partition.parts;
+      std::vector<std::map<std::uint32_t, std::set<std::uint64_t>>> surviving(P);  // part -> partner -> gids
+      std::vector<std::map<std::uint32_t, std::size_t>> before(P);
+      std::set<std::uint64_t> three_before, three_after;
+      for (std::uint32_t p = 0; p < P; ++p) {
+        mesh::PartFile a = mesh::read_part(part_path(params.parts_dir, p, false));
+        for (std::size_t v = 0; v < a.positions.size(); ++v) {
+          if (a.partner[v] == mesh::kSharedBy3) three_before.insert(a.global_ids[v]);
+          else if (a.shared(v)) before[p][a.partner[v]]++;
+        }
+        mesh::PartFile b = mesh::read_part(part_path(params.parts_dir, p, true));
+        for (std::size_t v = 0; v < b.positions.size(); ++v) {
+          if (b.partner[v] == mesh::kSharedBy3) three_after.insert(b.global_ids[v]);
+          else if (b.shared(v)) surviving[p][b.partner[v]].insert(b.global_ids[v]);
+        }
+      }
+      std::size_t simplified_seams = 0;
+      for (std::uint32_t p = 0; p < P; ++p)
+        for (std::uint32_t q : report.partition.adjacency[p]) {
+          EXPECT_EQ(surviving[p][q], surviving[q][p]) << "parts " << p << " and " << q;
+          simplified_seams += surviving[p][q].size() < before[p][q];
+        }
+      EXPECT_GT(simplified_seams, 0u);
+      EXPECT_EQ(three_after, three_before) << "a vertex of 3+ parts was removed";
+      Mesh out = mesh::read_mesh(dir.file("out.ply"));
+      auto d = mesh::compute_measures(out);
+      EXPECT_EQ(d.components, s.components);
+      EXPECT_EQ(d.boundary_loops, s.boundary_loops);
+      EXPECT_TRUE(d.is_manifold);
+      EXPECT_EQ(d.is_watertight, s.is_watertight);
+      EXPECT_EQ(d.degenerate_triangles, 0u);
+      double error = services::compare(input, out).mean_ab;
+      EXPECT_LE(error, 1.05 * single_error) << "single-node " << single_error;
+      EXPECT_NEAR(double(d.vertices) / double(s.vertices), 1.0, 0.1);
+      if (first.empty()) first = out;
+      else EXPECT_TRUE(out == first) << "the result depends on the number of workers";
+    }
+  }
+}
+
+// Many small parts (128 on a 200k sphere): each half-edge collapse on a seam is checked on the
+// neighbour's side too; without that, two parts' collapses made a non-manifold edge here.
+TEST(RemFiles, ManySmallPartsStayManifold) {
+  meshflow::testing::TempDir dir;
+  std::string in = generated(dir, mesh::Shape::Sphere, 200000);
+  DistributedParams params;
+  params.max_error_percent = 0.1, params.vertices_per_part = 1000, params.workers = 2;
+  params.parts_dir = dir.file("parts");
+  DistributedReport report = simplify_distributed(in, dir.file("out.ply"), params);
+  EXPECT_GE(report.partition.parts, 100u);
+  auto d = mesh::compute_measures(mesh::read_mesh(dir.file("out.ply")));
+  EXPECT_TRUE(d.is_manifold);
+  EXPECT_TRUE(d.is_watertight);
+  EXPECT_EQ(d.components, 1u);
+}
+
+TEST(RemFiles, RoundTripAndRefuseDamageNamingTheByte) {
+  mesh::RemFile rem{2, 5, {{10, 11}, {12, 11}, {11, 13}}};
+  std::vector<std::uint8_t> bytes = mesh::encode_rem(rem);
+  ASSERT_EQ(bytes.size(), 24u + 3 * 16);
+  mesh::RemFile back = mesh::decode_rem(bytes, "r.bin");
+  EXPECT_EQ(back.from, 2u);
+  EXPECT_EQ(back.to, 5u);
+  EXPECT_EQ(back.merges, rem.merges);
+  EXPECT_TRUE(mesh::decode_rem(mesh::encode_rem({0, 1, {}}), "r.bin").merges.empty());
+  auto refused_at = [](const std::vector<std::uint8_t>& b, const std::string& where) {
+    try {
+      mesh::decode_rem(b, "r.bin");
+      ADD_FAILURE() << "accepted damage expected at " << where;
+    } catch (const ParseError& e) {
+      EXPECT_NE(std::string(e.what()).find("r.bin: " + where), std::string::npos) << e.what();
+    }
+  };
+  for (std::size_t n = 0; n < bytes.size(); ++n)
+    refused_at(std::vector<std::uint8_t>(bytes.begin(), bytes.begin() + n), "byte");
+  auto damaged = [&](std::vector<std::pair<std::uint64_t, std::uint64_t>> merges) {
+    return mesh::encode_rem({2, 5, std::move(merges)});
+  };
+  refused_at(damaged({{10, 11}, {12, 11}, {10, 13}}), "byte 56:");  // removed twice
+  refused_at(damaged({{10, 11}, {12, 10}}), "byte 40:");            // kept after its removal
+  refused_at(damaged({{10, 10}}), "byte 24:");                      // merged into itself
+  refused_at(mesh::encode_rem({3, 3, {}}), "byte 8:");              // not two parts
+  std::vector<std::uint8_t> extra = bytes;
+  extra.push_back(0);
+  refused_at(extra, "byte");
+  bytes[3] = 'X';
+  refused_at(bytes, "byte 0:");
 }
 
 TEST(PartsIndex, RoundTripAndRefuseDamageWithLine) {
