@@ -55,7 +55,7 @@ void add_simplify_command(CLI::App& app, int& exit_status) {
   cmd->add_option("--parts-dir", args->parts_dir, "Keep the part files here (default: a temporary folder beside OUT)");
   cmd->add_flag("--progress", args->progress, "Progress bar on stderr even when it is not a terminal");
   cmd->add_flag("--fixed-seams", args->fixed_seams,
-                "Local workers keep every shared vertex fixed (no Rem files; the seam pass alone simplifies the seams)");
+                "Keep every shared vertex fixed (no Rem files; the seam pass alone simplifies the seams)");
   cmd->callback([args, &exit_status] {
     if (!(args->max_error > 0)) throw InvalidInput("--max-error must be > 0 (% of the diagonal)");
     parallel::DistributedParams params;
@@ -81,7 +81,7 @@ void add_simplify_command(CLI::App& app, int& exit_status) {
         if (!url.empty()) urls.push_back(url);
       nodes = std::make_unique<parallel::NodeDispatch>(urls, std::filesystem::absolute(params.parts_dir).string());
       params.workers = static_cast<unsigned>(urls.size());
-      params.runner = [&nodes](std::size_t p, double e) { return nodes->run(p, e); };
+      params.runner = [&nodes](std::size_t p, double e, bool fixed_seams) { return nodes->run(p, e, fixed_seams); };
     } else {
       params.worker_executable = std::filesystem::read_symlink("/proc/self/exe").string();
     }

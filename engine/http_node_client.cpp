@@ -371,9 +371,9 @@ StepReport HttpNodeClient::run_split(const std::vector<NodeCandidate>& nodes, co
   split.vertices_per_part = std::max<std::uint64_t>(smallest / 2, 1000);
   parallel::NodeDispatch dispatch(urls, split.parts_dir, options_.token);
   split.workers = static_cast<unsigned>(dispatch.nodes());
-  split.runner = [this, &dispatch](std::size_t p, double max_error_abs) {
+  split.runner = [this, &dispatch](std::size_t p, double max_error_abs, bool fixed_seams) {
     if (options_.cancelled && options_.cancelled()) throw std::runtime_error("cancelled");
-    return dispatch.run(p, max_error_abs);
+    return dispatch.run(p, max_error_abs, fixed_seams);
   };
   // A cancelled job stops at the next progress report (the parts under way on nodes finish there).
   split.progress = [this](const std::string& step, double fraction) {

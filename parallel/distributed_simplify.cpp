@@ -131,27 +131,8 @@ services::PartStats simplify_one_part(const std::string& dir, std::size_t p, dou
   }
   // The later neighbours' sides of the seams, for the checks of the half-edge collapses there
   // (their triangles at the shared vertices only).
-  for (std::uint32_t q : seams.unsimplified) {
-    const mesh::PartFile other = mesh::read_part(part_path(dir, q, false));
-    mesh::PartFile near;
-    std::vector<mesh::Index> renumber(other.positions.size(), ~mesh::Index{0});
-    for (const mesh::Triangle& t : other.triangles) {
-      if (other.partner[t[0]] != p && other.partner[t[1]] != p && other.partner[t[2]] != p) continue;
-      mesh::Triangle kept;
-      for (int k = 0; k < 3; ++k) {
-        mesh::Index& id = renumber[t[k]];
-        if (id == ~mesh::Index{0}) {
-          id = static_cast<mesh::Index>(near.positions.size());
-          near.global_ids.push_back(other.global_ids[t[k]]);
-          near.positions.push_back(other.positions[t[k]]);
-          near.partner.push_back(other.partner[t[k]]);
-        }
-        kept[k] = id;
-      }
-      near.triangles.push_back(kept);
-    }
-    seams.unsimplified_parts.push_back(std::move(near));
-  }
+  for (std::uint32_t q : seams.unsimplified)
+    seams.unsimplified_parts.push_back(services::seam_neighbourhood(mesh::read_part(part_path(dir, q, false)), seams.part));
   for (const mesh::RemFile& rem : seams.incoming)
     if (rem.from >= info.parts || rem.to != p) throw InvalidInput(rem_path(dir, rem.from, p) + ": names parts " +
                                                                   std::to_string(rem.from) + " -> " + std::to_string(rem.to));
@@ -177,9 +158,9 @@ void simplify_parts(const DistributedParams& params, DistributedReport& report) 
   const std::size_t parts = order.size();
   const std::size_t P = report.partition.parts;
   if (parts != P) throw std::logic_error("simplify_parts: the independent sets do not cover the parts once");
-  // Local parts follow the Rem scheme: a part starts once its neighbours earlier in the order are
-  // done. Nodes (a runner) keep every shared vertex fixed: any order.
-  const bool rem = !params.runner && !params.fixed_seams;
+  // The Rem scheme: a part starts once its neighbours earlier in the order are done. With fixed
+  // seams the parts are independent: any order.
+  const bool rem = !params.fixed_seams;
   std::vector<std::size_t> position(P), waiting(P, 0);
   for (std::size_t i = 0; i < parts; ++i) position[order[i]] = i;
   if (rem) {
@@ -222,7 +203,7 @@ void simplify_parts(const DistributedParams& params, DistributedReport& report) 
       services::PartStats stats;
       std::string failure;
       try {
-        if (params.runner) stats = params.runner(p, report.max_error_abs);
+        if (params.runner) stats = params.runner(p, report.max_error_abs, !rem);
         else if (!params.worker_executable.empty())
           stats = run_worker_process(params.worker_executable, params.parts_dir, p, report.max_error_abs, !rem);
         else stats = simplify_one_part(params.parts_dir, p, report.max_error_abs, !rem);

@@ -9,8 +9,8 @@
 // vertices shared by 3+ parts or with a simplified neighbour, half-edge-collapses along its
 // boundaries with later neighbours and writes what it removed there for them. The seam pass
 // then simplifies a band around what stayed fixed (mostly near 3+ vertices). The order does
-// not depend on the worker count, so neither does the result. Nodes (a PartRunner) still keep
-// every shared vertex fixed, and the seam pass does the seams.
+// not depend on the worker count, so neither does the result. Nodes (a PartRunner, parallel/
+// node_dispatch.h) follow the same scheme with the Rem files carried over HTTP.
 
 #include <cstddef>
 #include <functional>
@@ -26,9 +26,9 @@
 
 namespace meshflow::parallel {
 
-// Runs the per-part step on part p: DIR/part-<p>.mfp -> DIR/part-<p>.simplified.mfp, shared
-// vertices fixed (no Rem files).
-using PartRunner = std::function<services::PartStats(std::size_t p, double max_error_abs)>;
+// Runs the per-part step on part p as simplify_one_part does (DIR/part-<p>.mfp and the Rem files
+// for p -> p's Rem files, then DIR/part-<p>.simplified.mfp), elsewhere.
+using PartRunner = std::function<services::PartStats(std::size_t p, double max_error_abs, bool fixed_seams)>;
 
 struct DistributedParams {
   double max_error_percent = 0;  // of the input's diagonal, converted once here
@@ -40,7 +40,7 @@ struct DistributedParams {
   // --max-error-abs X` if worker_executable is set, else a thread of this process.
   PartRunner runner;
   std::string worker_executable;
-  bool fixed_seams = false;  // local workers too keep every shared vertex fixed (no Rem files)
+  bool fixed_seams = false;  // keep every shared vertex fixed (no Rem files; the seam pass does the seams)
   std::function<void(const std::string& step, double fraction)> progress;
 };
 

@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "mesh/errors.h"
+#include "mesh/part_files.h"
 #include "parallel/distributed_simplify.h"
 #include "parallel/partition.h"
 #include "protocol/http_client.h"
@@ -61,8 +62,18 @@ NodeDispatch::NodeDispatch(std::vector<std::string> node_urls, std::string parts
   d.nodes = std::move(node_urls);
   d.state.assign(d.nodes.size(), Impl::kFree);
   d.dir = std::move(parts_dir);
-  d.server.Get(R"(/parts/(part-\d+\.mfp))", [&d](const httplib::Request& req, httplib::Response& res) {
+  protocol::install_error_handling(d.server);
+  d.server.Get(R"(/parts/((part-\d+\.mfp)|(rem-\d+-\d+\.bin)))", [&d](const httplib::Request& req, httplib::Response& res) {
     protocol::serve_file(req, res, d.dir + "/" + std::string(req.matches[1]), "application/octet-stream");
+  });
+  // Part r's triangles at the vertices it shares with p: the unprocessed neighbour's side for p.
+  d.server.Get(R"(/parts/near-(\d+)-(\d+)\.mfp)", [&d](const httplib::Request& req, httplib::Response& res) {
+    const std::string r = req.matches[1], p = req.matches[2];
+    const std::string path = d.dir + "/part-" + r + ".mfp";
+    if (!std::filesystem::exists(path)) throw protocol::NotFound("no part " + r);
+    std::vector<std::uint8_t> bytes = mesh::encode_part(
+        services::seam_neighbourhood(mesh::read_part(path), static_cast<std::uint32_t>(std::stoul(p))));
+    res.set_content(std::string(bytes.begin(), bytes.end()), "application/octet-stream");
   });
   const std::string host = loopback ? "127.0.0.1" : "0.0.0.0";
   int port = d.server.bind_to_any_port(host);
@@ -88,9 +99,25 @@ struct NodeDown : std::runtime_error {
 };
 
 services::PartStats run_on(const std::string& node, const std::string& base_url, const std::string& dir, std::size_t p,
-                           double max_error_abs, const std::string& token) {
+                           double max_error_abs, bool fixed_seams, const std::string& token) {
   const std::string part_url = base_url + "/parts/part-" + std::to_string(p) + ".mfp";
-  json request{{"vertices", part_url}, {"triangles", part_url}, {"removed", json::array()}, {"max_error_abs", max_error_abs}};
+  json request{{"vertices", part_url}, {"triangles", part_url}, {"boundary", part_url}, {"removed", json::array()},
+               {"max_error_abs", max_error_abs}};
+  std::vector<std::uint32_t> unprocessed;
+  if (!fixed_seams) {
+    // As simplify_one_part: a neighbour with a Rem file for p is done, the others come later.
+    request["part"] = p;
+    request["unprocessed"] = json::array();
+    const PartitionInfo info = read_partition_info(dir);
+    for (std::uint32_t q : info.adjacency.at(p)) {
+      if (std::filesystem::exists(rem_path(dir, q, p))) {
+        request["removed"].push_back({{"from_part", q}, {"url", base_url + "/parts/rem-" + std::to_string(q) + "-" + std::to_string(p) + ".bin"}});
+      } else {
+        unprocessed.push_back(q);
+        request["unprocessed"].push_back({{"part", q}, {"url", base_url + "/parts/near-" + std::to_string(q) + "-" + std::to_string(p) + ".mfp"}});
+      }
+    }
+  }
   protocol::HttpOptions http;
   http.timeout = std::chrono::minutes(60);
   http.bearer_token = token;
@@ -110,6 +137,24 @@ services::PartStats run_on(const std::string& node, const std::string& base_url,
   }
   if (!r.ok() || !answer.is_object() || !answer.contains("part") || !answer["part"].is_string())
     throw IoError(node + ": part " + std::to_string(p) + ": " + r.describe());
+  // Each Rem file first: the simplified part's presence means the part is complete.
+  const json& removed = answer.contains("removed") ? answer["removed"] : json();
+  if (!fixed_seams && (!removed.is_array() || removed.size() != unprocessed.size()))
+    throw IoError(node + ": part " + std::to_string(p) + ": one Rem file per unprocessed neighbour expected, got " + removed.dump());
+  for (std::size_t i = 0; !fixed_seams && i < unprocessed.size(); ++i) {
+    const json& rem = removed[i];
+    if (!rem.is_object() || rem.value("to_part", json()) != json(unprocessed[i]) || !rem.contains("url") || !rem["url"].is_string())
+      throw IoError(node + ": part " + std::to_string(p) + ": expected the Rem file for part " + std::to_string(unprocessed[i]) +
+                    ", got " + rem.dump());
+    std::optional<std::string> rem_sha;
+    if (rem.contains("sha256") && rem["sha256"].is_string()) rem_sha = rem["sha256"].get<std::string>();
+    const std::string path = rem_path(dir, p, unprocessed[i]);
+    protocol::DownloadResult got = protocol::http_download(rem["url"].get<std::string>(), path + ".tmp", rem_sha);
+    if (got.status == 0 && got.error.find("SHA") == std::string::npos) throw NodeDown(node + ": " + got.describe());
+    if (!got.ok()) throw IoError(node + ": cannot fetch the Rem file " + std::to_string(p) + " -> " + std::to_string(unprocessed[i]) + ": " + got.describe());
+    mesh::read_rem(path + ".tmp");  // refused here, naming the byte, rather than by the next part
+    std::filesystem::rename(path + ".tmp", path);
+  }
   std::optional<std::string> sha;
   if (answer.contains("sha256") && answer["sha256"].is_string()) sha = answer["sha256"].get<std::string>();
   protocol::DownloadResult got = protocol::http_download(answer["part"].get<std::string>(), part_path(dir, p, true), sha);
@@ -121,7 +166,7 @@ services::PartStats run_on(const std::string& node, const std::string& base_url,
 }  // namespace
 
 // A node that does not answer is dropped and the part goes to another (DESIGN §10).
-services::PartStats NodeDispatch::run(std::size_t p, double max_error_abs) {
+services::PartStats NodeDispatch::run(std::size_t p, double max_error_abs, bool fixed_seams) {
   Impl& d = *impl_;
   for (;;) {
     std::size_t n;
@@ -135,7 +180,7 @@ services::PartStats NodeDispatch::run(std::size_t p, double max_error_abs) {
       d.state[n] = Impl::kBusy;
     }
     try {
-      services::PartStats stats = run_on(d.nodes[n], d.base_url, d.dir, p, max_error_abs, d.token);
+      services::PartStats stats = run_on(d.nodes[n], d.base_url, d.dir, p, max_error_abs, fixed_seams, d.token);
       std::lock_guard lock(d.mutex);
       d.state[n] = Impl::kFree;
       d.freed.notify_one();

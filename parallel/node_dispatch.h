@@ -1,10 +1,16 @@
 #pragma once
 // The per-part step on mesh nodes (DESIGN §4 POST /parts/simplify): the coordinator serves its
-// parts directory's part files over HTTP itself (GET /parts/part-<p>.mfp, nothing else), each
-// node fetches its part, simplifies it and answers the URL of the simplified part on its
-// /files, which the coordinator downloads into the parts directory. One part per node at a
-// time; a long run answers 202 and is polled at its task URL. A node that stops answering is
-// dropped and its part goes to another node.
+// parts directory over HTTP itself, each node fetches its part, simplifies it and answers the
+// URL of the simplified part on its /files, which the coordinator downloads into the parts
+// directory. The Rem scheme (parallel/distributed_simplify.h) goes over the wire: the request
+// names the Rem files of p's simplified neighbours ("removed": [{"from_part", "url"}]) and,
+// for each neighbour still to come, the part's triangles at their common vertices
+// ("unprocessed": [{"part", "url"}], for the checks on its side); the node answers a Rem file
+// per unprocessed neighbour ("removed": [{"to_part", "url", "sha256"}]), fetched into
+// DIR/rem-<p>-<r>.bin before the part. Served: GET /parts/part-<p>.mfp, /parts/rem-<q>-<p>.bin
+// and /parts/near-<r>-<p>.mfp (made on request), nothing else. One part per node at a time; a
+// long run answers 202 and is polled at its task URL. A node that stops answering is dropped
+// and its part goes to another node.
 // Nodes started with --hub take part files only from the hub's host (the engine's split steps
 // run inside the hub), the hub and registered nodes; pass their token.
 
@@ -25,7 +31,7 @@ class NodeDispatch {
   NodeDispatch(std::vector<std::string> node_urls, std::string parts_dir, std::string token = {});
   ~NodeDispatch();
   // Part p on a free node; blocks until done. \throws on a node's error, with its answer.
-  services::PartStats run(std::size_t p, double max_error_abs);
+  services::PartStats run(std::size_t p, double max_error_abs, bool fixed_seams = false);
   std::size_t nodes() const;
 
  private:

@@ -293,21 +293,66 @@ struct NodeServer::Impl {
     }
   }
 
+  // A part file or Rem file named by the coordinator, fetched and read whole.
+  std::vector<std::uint8_t> fetch_part_bytes(const std::string& url) {
+    check_part_origin(url);
+    const auto incoming = cache->files_dir() / ("incoming-" + std::to_string(next_incoming++));
+    protocol::DownloadResult got = protocol::http_download(url, incoming.string());
+    if (!got.ok()) {
+      std::error_code ignored;
+      std::filesystem::remove(incoming, ignored);
+      throw IoError("cannot fetch " + url + ": " + got.describe());
+    }
+    std::vector<std::uint8_t> bytes = mesh::read_file_bytes(incoming.string());
+    std::filesystem::remove(incoming);
+    return bytes;
+  }
+
+  // DESIGN §9's per-part step. With "part", the Rem scheme (services/part_simplify.h): the Rem
+  // files of the simplified neighbours in "removed", the unprocessed neighbours' triangles at
+  // the common vertices in "unprocessed"; one Rem file answered per unprocessed neighbour.
+  // Without it, every shared vertex stays fixed and "removed" must be empty.
   json run_part(const json& body) {
     const std::string part_url = required_string(body, "vertices");
-    if (body.contains("triangles") && !(body["triangles"].is_string() && body["triangles"] == part_url))
-      throw InvalidInput("'triangles' must name the same part file as 'vertices' (one .mfp holds both)");
-    if (body.contains("removed") && !(body["removed"].is_array() && body["removed"].empty()))
-      throw InvalidInput("'removed' must be empty: parts keep their shared vertices fixed and the coordinator simplifies the seams");
+    for (const char* same : {"triangles", "boundary"})
+      if (body.contains(same) && !(body[same].is_string() && body[same] == part_url))
+        throw InvalidInput(std::string("'") + same + "' must name the same part file as 'vertices' (one .mfp holds all three)");
     auto e = body.find("max_error_abs");
     if (e == body.end() || !e->is_number() || !(e->get<double>() > 0))
       throw InvalidInput("'max_error_abs' must be a number > 0");
-    check_part_origin(part_url);
-    const auto incoming = cache->files_dir() / ("incoming-" + std::to_string(next_incoming++) + ".mfp");
-    protocol::DownloadResult got = protocol::http_download(part_url, incoming.string());
-    if (!got.ok()) throw IoError("cannot fetch the part " + part_url + ": " + got.describe());
-    std::vector<std::uint8_t> bytes = mesh::read_file_bytes(incoming.string());
-    std::filesystem::remove(incoming);
+    const json removed = body.value("removed", json::array()), unprocessed = body.value("unprocessed", json::array());
+    if (!removed.is_array() || !unprocessed.is_array()) throw InvalidInput("'removed' and 'unprocessed' must be arrays");
+    const bool rem = body.contains("part");
+    if (!rem && (!removed.empty() || !unprocessed.empty()))
+      throw InvalidInput("'removed' and 'unprocessed' need 'part' (this part's number); without it shared vertices stay fixed");
+    PartSeams seams;
+    if (rem) {
+      if (!body["part"].is_number_unsigned() || body["part"].get<std::uint64_t>() >= (1u << 24))
+        throw InvalidInput("'part' must be a part number");
+      seams.part = body["part"].get<std::uint32_t>();
+    }
+    auto part_number = [](const json& entry, const char* key, const char* list) {
+      if (!entry.is_object() || !entry.contains(key) || !entry[key].is_number_unsigned() || !entry.contains("url") ||
+          !entry["url"].is_string())
+        throw InvalidInput(std::string("each of '") + list + "' needs \"" + key + "\" (a part number) and \"url\"");
+      return entry[key].get<std::uint32_t>();
+    };
+    for (const json& entry : removed) {
+      const std::uint32_t from = part_number(entry, "from_part", "removed");
+      const std::string url = entry["url"];
+      std::vector<std::uint8_t> bytes = fetch_part_bytes(url);
+      mesh::RemFile file = mesh::decode_rem(bytes, url);
+      if (file.from != from || file.to != seams.part)
+        throw InvalidInput(url + ": a Rem file from part " + std::to_string(file.from) + " to " + std::to_string(file.to) +
+                           ", expected " + std::to_string(from) + " -> " + std::to_string(seams.part));
+      seams.incoming.push_back(std::move(file));
+    }
+    for (const json& entry : unprocessed) {
+      seams.unsimplified.push_back(part_number(entry, "part", "unprocessed"));
+      const std::string url = entry["url"];
+      seams.unsimplified_parts.push_back(mesh::decode_part(fetch_part_bytes(url), url));
+    }
+    std::vector<std::uint8_t> bytes = fetch_part_bytes(part_url);
     mesh::PartFile part = mesh::decode_part(bytes, part_url);
     bytes = {};
     if (part.positions.size() > options.capacity_vertices)
@@ -318,10 +363,19 @@ struct NodeServer::Impl {
       ~Done() { n--; }
     } done{running};
     PartStats stats;
-    std::vector<std::uint8_t> out = mesh::encode_part(simplify_part(part, e->get<double>(), &stats));
+    std::vector<mesh::RemFile> outgoing;
+    std::vector<std::uint8_t> out =
+        mesh::encode_part(simplify_part(part, e->get<double>(), &stats, rem ? &seams : nullptr, &outgoing));
+    json rem_files = json::array();
+    for (const mesh::RemFile& file : outgoing) {
+      std::vector<std::uint8_t> encoded = mesh::encode_rem(file);
+      std::string sha = mesh::sha256_hex(encoded.data(), encoded.size());
+      cache->store_file(sha + ".rem", std::string(encoded.begin(), encoded.end()));
+      rem_files.push_back({{"to_part", file.to}, {"url", file_url(sha + ".rem")}, {"sha256", sha}});
+    }
     std::string sha = mesh::sha256_hex(out.data(), out.size());
     cache->store_file(sha + ".mfp", std::string(out.begin(), out.end()));
-    return {{"part", file_url(sha + ".mfp")}, {"sha256", sha}, {"removed", json::array()},
+    return {{"part", file_url(sha + ".mfp")}, {"sha256", sha}, {"boundary", file_url(sha + ".mfp")}, {"removed", rem_files},
             {"stats", json::parse(stats.to_json())}};
   }
   std::atomic<std::uint64_t> next_incoming{1};
@@ -419,7 +473,7 @@ struct NodeServer::Impl {
       std::string name = req.matches[1];
       protocol::serve_file(req, res, cache->mesh_path(name.substr(0, 64)).string(), "application/zstd");
     });
-    server.Get(R"(/files/([0-9a-f]{64}\.mfp))", [this](const httplib::Request& req, httplib::Response& res) {
+    server.Get(R"(/files/([0-9a-f]{64}\.(mfp|rem)))", [this](const httplib::Request& req, httplib::Response& res) {
       protocol::serve_file(req, res, (cache->files_dir() / std::string(req.matches[1])).string(),
                            "application/octet-stream");
     });

@@ -36,6 +36,10 @@ struct PartSeams {
   std::vector<mesh::PartFile> unsimplified_parts;
 };
 
+// What PartSeams::unsimplified_parts needs of neighbour part `neighbour`: its triangles with a
+// corner shared with part `part`, their vertices renumbered (global ids ascending kept).
+mesh::PartFile seam_neighbourhood(const mesh::PartFile& neighbour, std::uint32_t part);
+
 // \throws InvalidInput when max_error_abs <= 0, or when a Rem file does not fit the part.
 // With seams, `outgoing` receives one Rem file per seams->unsimplified neighbour, in that order.
 mesh::PartFile simplify_part(const mesh::PartFile& part, double max_error_abs, PartStats* stats = nullptr,

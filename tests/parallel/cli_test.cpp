@@ -67,9 +67,9 @@ TEST(SimplifyCommand, RefusesBadInputClearly) {
   EXPECT_NE(r.err.find("partition.txt"), std::string::npos) << r.err;
 }
 
-// Two real nodes on loopback simplify the parts (POST /parts/simplify); the result is the
-// same as with local worker processes keeping every shared vertex fixed as nodes do
-// (--fixed-seams), and with one node as with two.
+// Two real nodes on loopback simplify the parts (POST /parts/simplify) by the Rem scheme, the
+// Rem files carried over HTTP: the result is the bytes local worker processes give, with one
+// node as with two; with --fixed-seams too.
 TEST(SimplifyCommand, NodesGiveTheSameResultAsLocalWorkers) {
   meshflow::testing::TempDir dir;
   mesh::GenerateParams g;
@@ -83,7 +83,7 @@ TEST(SimplifyCommand, NodesGiveTheSameResultAsLocalWorkers) {
   ASSERT_FALSE(url_a.empty());
   ASSERT_FALSE(url_b.empty());
   const std::string common = dir.file("in.ply") + " --max-error 0.1 --vertices-per-part 3000";
-  Outcome r = run(dir, "simplify " + common + " -o " + dir.file("local.ply") + " --workers 2 --fixed-seams");
+  Outcome r = run(dir, "simplify " + common + " -o " + dir.file("local.ply") + " --workers 2");
   ASSERT_EQ(r.status, 0) << r.err;
   r = run(dir, "simplify " + common + " -o " + dir.file("two.ply") + " --nodes " + url_a + "," + url_b + " --report " + dir.file("r.json"));
   ASSERT_EQ(r.status, 0) << r.err;
@@ -97,6 +97,18 @@ TEST(SimplifyCommand, NodesGiveTheSameResultAsLocalWorkers) {
   std::string json((std::istreambuf_iterator<char>(report)), std::istreambuf_iterator<char>());
   EXPECT_NE(json.find("\"vertices_in\": "), std::string::npos) << json;  // the nodes' stats came back
   EXPECT_EQ(json.find("\"vertices_in\": 0,"), std::string::npos) << json;
+  auto number = [&](const std::string& key) {
+    std::size_t at = json.find("\"" + key + "\": ");
+    return at == std::string::npos ? -1L : std::atol(json.c_str() + at + key.size() + 4);
+  };
+  EXPECT_GT(number("shared_removed_by_half_edge_collapses"), 0) << json;  // the nodes made Rem files
+  EXPECT_EQ(number("shared_removed_by_half_edge_collapses"), number("shared_removed_by_replay")) << json;
+  r = run(dir, "simplify " + common + " -o " + dir.file("local-fixed.ply") + " --workers 2 --fixed-seams");
+  ASSERT_EQ(r.status, 0) << r.err;
+  r = run(dir, "simplify " + common + " -o " + dir.file("two-fixed.ply") + " --nodes " + url_a + "," + url_b + " --fixed-seams");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(mesh::read_mesh(dir.file("two-fixed.ply")) == mesh::read_mesh(dir.file("local-fixed.ply")));
+  EXPECT_FALSE(mesh::read_mesh(dir.file("two-fixed.ply")) == local);
   // A node refuses a part file it cannot read, naming it.
   std::ofstream(dir.file("junk.mfp")) << "MFPART1\n";
   std::string body = R"({"vertices": ")" + url_a + R"(/nowhere.mfp", "max_error_abs": 0.1})";
@@ -110,12 +122,23 @@ TEST(SimplifyCommand, NodesGiveTheSameResultAsLocalWorkers) {
   std::ifstream answer(dir.file("answer"));
   std::string text((std::istreambuf_iterator<char>(answer)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("nowhere.mfp"), std::string::npos) << text;
-  body = R"({"vertices": ")" + url_a + R"(/x.mfp", "max_error_abs": 0})";
-  raw = std::system(("curl -s -m 20 -o /dev/null -w '%{http_code}' -d '" + body + "' " + url_a + "/parts/simplify > " +
-                     dir.file("code")).c_str());
-  std::ifstream code2(dir.file("code"));
-  code2 >> status;
-  EXPECT_EQ(status, "400");
+  auto post = [&](const std::string& request) {
+    int rc = std::system(("curl -s -m 20 -o " + dir.file("answer") + " -w '%{http_code}' -d '" + request + "' " + url_a +
+                          "/parts/simplify > " + dir.file("code")).c_str());
+    EXPECT_EQ(rc, 0);
+    std::ifstream c(dir.file("code")), a(dir.file("answer"));
+    std::string s, t((std::istreambuf_iterator<char>(a)), std::istreambuf_iterator<char>());
+    c >> s;
+    return std::pair{s, t};
+  };
+  EXPECT_EQ(post(R"({"vertices": ")" + url_a + R"(/x.mfp", "max_error_abs": 0})").first, "400");
+  // Rem files without the part's number; a list entry without its part number.
+  auto [rem_status, rem_text] = post(R"({"vertices": ")" + url_a + R"(/x.mfp", "max_error_abs": 1, "removed": [{"from_part": 1, "url": "http://127.0.0.1:1/r"}]})");
+  EXPECT_EQ(rem_status, "400");
+  EXPECT_NE(rem_text.find("'part'"), std::string::npos) << rem_text;
+  std::tie(rem_status, rem_text) = post(R"({"vertices": ")" + url_a + R"(/x.mfp", "max_error_abs": 1, "part": 0, "unprocessed": [{"url": "http://127.0.0.1:1/r"}]})");
+  EXPECT_EQ(rem_status, "400");
+  EXPECT_NE(rem_text.find("unprocessed"), std::string::npos) << rem_text;
 }
 
 // Local worker processes follow the Rem scheme: each part's outgoing Rem files are in the
@@ -173,7 +196,7 @@ s.serve_forever()
   ASSERT_FALSE(stub_url.empty());
   ASSERT_FALSE(node_url.empty());
   const std::string common = dir.file("in.ply") + " --max-error 0.1 --vertices-per-part 2000";
-  Outcome r = run(dir, "simplify " + common + " -o " + dir.file("local.ply") + " --workers 1 --fixed-seams");
+  Outcome r = run(dir, "simplify " + common + " -o " + dir.file("local.ply") + " --workers 1");
   ASSERT_EQ(r.status, 0) << r.err;
   r = run(dir, "simplify " + common + " -o " + dir.file("nodes.ply") + " --nodes " + stub_url + "," + node_url);
   ASSERT_EQ(r.status, 0) << r.err;
