@@ -47,7 +47,9 @@ TEST(GidIndex, FindsEveryIdOfDenseRunsAndSparseListsAndNothingElse) {
   GidIndex index(ids);
   for (std::size_t i = 0; i < ids.size(); ++i) ASSERT_EQ(index.find(ids[i]), i) << ids[i];
   for (std::uint32_t g = 0; g < member.size(); ++g)
-    if (!member[g]) ASSERT_EQ(index.find(g), GidIndex::npos) << g;
+    if (!member[g]) {
+      ASSERT_EQ(index.find(g), GidIndex::npos) << g;
+    }
   EXPECT_EQ(index.find(4000000001u), GidIndex::npos);
   EXPECT_EQ(GidIndex({}).find(0), GidIndex::npos);
 }
@@ -60,11 +62,17 @@ TEST(CellIds, ReadsBackEveryIdThroughFewWindowsWhileStillAppending) {
     CellIds ids(dir.file("cells.bin"), 2);
     for (std::uint64_t v = 0; v < n; ++v) {
       ids.push_back(cell(v));
-      if (v % 100003 == 0) ASSERT_EQ(ids[v / 2], cell(v / 2)) << v;  // interleaved, as OBJ may be
+      if (v % 100003 == 0) {
+        ASSERT_EQ(ids[v / 2], cell(v / 2)) << v;  // interleaved, as OBJ may be
+      }
     }
     ASSERT_EQ(ids.size(), n);
     for (std::uint64_t v = 0; v < n; v += 7) ASSERT_EQ(ids[v], cell(v)) << v;      // in order
-    for (std::uint64_t v = n; v-- > 0;) if (v % 1013 == 0) ASSERT_EQ(ids[v], cell(v)) << v;  // backwards
+    for (std::uint64_t v = n; v-- > 0;) {
+      if (v % 1013 == 0) {
+        ASSERT_EQ(ids[v], cell(v)) << v;  // backwards
+      }
+    }
     EXPECT_GT(ids.windows_loaded(), 3u);  // two windows held: the others were read again
     EXPECT_TRUE(std::filesystem::exists(dir.file("cells.bin")));
   }
@@ -119,7 +127,9 @@ TEST(Partition, EveryTriangleOnceSharedFlagsAndAdjacencyConsistent) {
     if (uses.size() >= 2) ++shared;
     for (const auto& [a, fa] : uses)
       for (const auto& [b, fb] : uses)
-        if (a != b) EXPECT_TRUE(std::binary_search(info.adjacency[a].begin(), info.adjacency[a].end(), b));
+        if (a != b) {
+          EXPECT_TRUE(std::binary_search(info.adjacency[a].begin(), info.adjacency[a].end(), b));
+        }
   }
   EXPECT_EQ(shared, info.shared_vertices);
   EXPECT_FALSE(std::filesystem::exists(dir.file("parts/scratch"))) << "scratch files left behind";
@@ -174,7 +184,7 @@ TEST(DistributedSimplify, MatchesSingleNodeWithoutCracks) {
     std::string in = generated(dir, shape, 80000);
     Mesh input = mesh::read_mesh(in);
     double max_error = 0.0005 * mesh::bounding_box(input).diagonal();
-    Mesh single = services::simplify(input, {.max_error = max_error}).output;
+    Mesh single = services::simplify(input, {.max_error = max_error, .progress = {}}).output;
     auto s = mesh::compute_measures(single);
     double single_error = services::compare(input, single).mean_ab;
     Mesh first;
@@ -349,7 +359,7 @@ TEST(RemFiles, ReplayKeepsCommonBoundariesEqualAndMatchesSingleNode) {
     std::string in = generated(dir, shape, 200000);
     Mesh input = mesh::read_mesh(in);
     double max_error = 0.0005 * mesh::bounding_box(input).diagonal();
-    Mesh single = services::simplify(input, {.max_error = max_error}).output;
+    Mesh single = services::simplify(input, {.max_error = max_error, .progress = {}}).output;
     auto s = mesh::compute_measures(single);
     double single_error = services::compare(input, single).mean_ab;
     Mesh first;
