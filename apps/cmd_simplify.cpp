@@ -1,7 +1,6 @@
 // meshflow simplify IN -o OUT --max-error E [--workers N | --nodes URL,...] [--vertices-per-part N]
 //   [--report R.json] [--parts-dir D] [--progress]; meshflow partition IN --vertices-per-part N
 //   --parts-dir D; meshflow merge D -o OUT.ply --max-error E (after `simplify --parts-dir D`).
-#include <malloc.h>
 #include <unistd.h>
 
 #include <cstdio>
@@ -59,10 +58,6 @@ void add_simplify_command(CLI::App& app, int& exit_status) {
                 "Keep every shared vertex fixed (no Rem files; the seam pass alone simplifies the seams)");
   cmd->callback([args, &exit_status] {
     if (!(args->max_error > 0)) throw InvalidInput("--max-error must be > 0 (% of the diagonal)");
-    // Part-sized buffers (tens of MB) come and go on many threads here (the partition, the
-    // nodes' requests); glibc would keep each freed one in its thread's arena, growing the peak
-    // by a part per thread. Above 4 MB, allocations are mapped and unmapped instead.
-    mallopt(M_MMAP_THRESHOLD, 4 << 20);
     parallel::DistributedParams params;
     params.fixed_seams = args->fixed_seams;
     params.max_error_percent = args->max_error;

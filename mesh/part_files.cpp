@@ -1,5 +1,6 @@
 #include "mesh/part_files.h"
 
+#include <algorithm>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -120,6 +121,54 @@ void write_part(const PartFile& part, const std::string& path) {
   std::ofstream out(path, std::ios::binary);
   out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
   if (!out) throw IoError(path + ": cannot write the part file");
+}
+
+std::vector<std::pair<std::uint32_t, PartFile>> seam_sides(const PartFile& part) {
+  // The triangles of each seam, in one pass (a triangle may touch up to three).
+  std::vector<std::uint32_t> partners;
+  std::vector<std::vector<std::size_t>> triangles;
+  auto slot = [&](std::uint32_t q) {
+    auto it = std::lower_bound(partners.begin(), partners.end(), q);
+    const std::size_t at = it - partners.begin();
+    if (it == partners.end() || *it != q) {
+      partners.insert(it, q);
+      triangles.insert(triangles.begin() + at, std::vector<std::size_t>());
+    }
+    return at;
+  };
+  for (std::size_t t = 0; t < part.triangles.size(); ++t) {
+    const Triangle& tri = part.triangles[t];
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t q = part.partner[tri[k]];
+      if (q >= kSharedBy3) continue;
+      if ((k > 0 && part.partner[tri[0]] == q) || (k > 1 && part.partner[tri[1]] == q)) continue;  // once per triangle
+      triangles[slot(q)].push_back(t);
+    }
+  }
+  std::vector<std::pair<std::uint32_t, PartFile>> sides;
+  constexpr Index kUnused = ~Index{0};
+  std::vector<Index> renumber(part.positions.size(), kUnused);
+  for (std::size_t i = 0; i < partners.size(); ++i) {
+    std::vector<Index> used;
+    for (std::size_t t : triangles[i])
+      for (Index v : part.triangles[t])
+        if (renumber[v] == kUnused) renumber[v] = 0, used.push_back(v);
+    std::sort(used.begin(), used.end());  // this part's order: global ids ascend
+    PartFile side;
+    for (Index v : used) {
+      renumber[v] = static_cast<Index>(side.positions.size());
+      side.global_ids.push_back(part.global_ids[v]);
+      side.positions.push_back(part.positions[v]);
+      side.partner.push_back(part.partner[v]);
+    }
+    for (std::size_t t : triangles[i]) {
+      const Triangle& tri = part.triangles[t];
+      side.triangles.push_back({renumber[tri[0]], renumber[tri[1]], renumber[tri[2]]});
+    }
+    for (Index v : used) renumber[v] = kUnused;
+    sides.emplace_back(partners[i], std::move(side));
+  }
+  return sides;
 }
 
 PartFile read_part(const std::string& path) {

@@ -34,6 +34,12 @@ struct PartFile {
   std::vector<std::array<double, 11>> quadrics;  // empty, or one per vertex
 };
 
+// Each seam of `part` seen from this side: for each part q that shares some vertex with this part
+// alone (a partner), this part's triangles with a corner shared with q, their vertices numbered
+// in this part's order (global ids still ascending). The partitioner writes them beside the
+// parts; the part q checks its half-edge collapses along the seam against them.
+std::vector<std::pair<std::uint32_t, PartFile>> seam_sides(const PartFile& part);
+
 std::vector<std::uint8_t> encode_part(const PartFile& part);
 // \throws ParseError naming `name` and the byte offset on any malformed content.
 PartFile decode_part(std::span<const std::uint8_t> bytes, const std::string& name);

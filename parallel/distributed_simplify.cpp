@@ -65,15 +65,6 @@ services::PartStats run_worker_process(const std::string& exe, const std::string
   return stats_from_json(nlohmann::json::parse(last, nullptr, false));
 }
 
-std::string json_escape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    if (static_cast<unsigned char>(c) >= 0x20) out += c;
-  }
-  return out;
-}
-
 }  // namespace
 
 services::PartStats stats_from_json(const nlohmann::json& s) {
@@ -131,8 +122,10 @@ services::PartStats simplify_one_part(const std::string& dir, std::size_t p, dou
   }
   // The later neighbours' sides of the seams, for the checks of the half-edge collapses there
   // (their triangles at the shared vertices only).
-  for (std::uint32_t q : seams.unsimplified)
-    seams.unsimplified_parts.push_back(services::seam_neighbourhood(mesh::read_part(part_path(dir, q, false)), seams.part));
+  for (std::uint32_t q : seams.unsimplified) {
+    const std::string side = seam_path(dir, q, p);
+    seams.unsimplified_parts.push_back(std::filesystem::exists(side) ? mesh::read_part(side) : mesh::PartFile{});
+  }
   for (const mesh::RemFile& rem : seams.incoming)
     if (rem.from >= info.parts || rem.to != p) throw InvalidInput(rem_path(dir, rem.from, p) + ": names parts " +
                                                                   std::to_string(rem.from) + " -> " + std::to_string(rem.to));

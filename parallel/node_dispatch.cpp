@@ -63,17 +63,15 @@ NodeDispatch::NodeDispatch(std::vector<std::string> node_urls, std::string parts
   d.state.assign(d.nodes.size(), Impl::kFree);
   d.dir = std::move(parts_dir);
   protocol::install_error_handling(d.server);
-  d.server.Get(R"(/parts/((part-\d+\.mfp)|(rem-\d+-\d+\.bin)))", [&d](const httplib::Request& req, httplib::Response& res) {
-    protocol::serve_file(req, res, d.dir + "/" + std::string(req.matches[1]), "application/octet-stream");
-  });
-  // Part r's triangles at the vertices it shares with p: the unprocessed neighbour's side for p.
-  d.server.Get(R"(/parts/near-(\d+)-(\d+)\.mfp)", [&d](const httplib::Request& req, httplib::Response& res) {
-    const std::string r = req.matches[1], p = req.matches[2];
-    const std::string path = d.dir + "/part-" + r + ".mfp";
-    if (!std::filesystem::exists(path)) throw protocol::NotFound("no part " + r);
-    std::vector<std::uint8_t> bytes = mesh::encode_part(
-        services::seam_neighbourhood(mesh::read_part(path), static_cast<std::uint32_t>(std::stoul(p))));
-    res.set_content(std::string(bytes.begin(), bytes.end()), "application/octet-stream");
+  d.server.Get(R"(/parts/(part-\d+\.mfp|seam-\d+-\d+\.mfp|rem-\d+-\d+\.bin))", [&d](const httplib::Request& req, httplib::Response& res) {
+    const std::string name = req.matches[1], path = d.dir + "/" + name;
+    // A seam with no vertex shared by the two parts alone has no file: an empty side.
+    if (name.rfind("seam-", 0) == 0 && !std::filesystem::exists(path)) {
+      const std::vector<std::uint8_t> empty = mesh::encode_part({});
+      res.set_content(std::string(empty.begin(), empty.end()), "application/octet-stream");
+      return;
+    }
+    protocol::serve_file(req, res, path, "application/octet-stream");
   });
   const std::string host = loopback ? "127.0.0.1" : "0.0.0.0";
   int port = d.server.bind_to_any_port(host);
@@ -114,7 +112,7 @@ services::PartStats run_on(const std::string& node, const std::string& base_url,
         request["removed"].push_back({{"from_part", q}, {"url", base_url + "/parts/rem-" + std::to_string(q) + "-" + std::to_string(p) + ".bin"}});
       } else {
         unprocessed.push_back(q);
-        request["unprocessed"].push_back({{"part", q}, {"url", base_url + "/parts/near-" + std::to_string(q) + "-" + std::to_string(p) + ".mfp"}});
+        request["unprocessed"].push_back({{"part", q}, {"url", base_url + "/parts/seam-" + std::to_string(q) + "-" + std::to_string(p) + ".mfp"}});
       }
     }
   }

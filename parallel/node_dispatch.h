@@ -4,11 +4,11 @@
 // URL of the simplified part on its /files, which the coordinator downloads into the parts
 // directory. The Rem scheme (parallel/distributed_simplify.h) goes over the wire: the request
 // names the Rem files of p's simplified neighbours ("removed": [{"from_part", "url"}]) and,
-// for each neighbour still to come, the part's triangles at their common vertices
-// ("unprocessed": [{"part", "url"}], for the checks on its side); the node answers a Rem file
-// per unprocessed neighbour ("removed": [{"to_part", "url", "sha256"}]), fetched into
-// DIR/rem-<p>-<r>.bin before the part. Served: GET /parts/part-<p>.mfp, /parts/rem-<q>-<p>.bin
-// and /parts/near-<r>-<p>.mfp (made on request), nothing else. One part per node at a time; a
+// for each neighbour still to come, its side of their seam as partitioned ("unprocessed":
+// [{"part", "url"}], for the checks there); the node answers a Rem file per unprocessed
+// neighbour ("removed": [{"to_part", "url", "sha256"}]), fetched into DIR/rem-<p>-<r>.bin
+// before the part. Served: GET /parts/part-<p>.mfp, /parts/rem-<q>-<p>.bin and
+// /parts/seam-<r>-<p>.mfp, nothing else. One part per node at a time; a
 // long run answers 202 and is polled at its task URL. A node that stops answering is dropped
 // and its part goes to another node.
 // Nodes started with --hub take part files only from the hub's host (the engine's split steps

@@ -163,6 +163,10 @@ std::string rem_path(const std::string& dir, std::size_t from, std::size_t to) {
   return dir + "/rem-" + std::to_string(from) + "-" + std::to_string(to) + ".bin";
 }
 
+std::string seam_path(const std::string& dir, std::size_t p, std::size_t q) {
+  return dir + "/seam-" + std::to_string(p) + "-" + std::to_string(q) + ".mfp";
+}
+
 PartitionInfo partition_file(const std::string& input, std::size_t vertices_per_part, const std::string& dir,
                              const std::function<void(double)>& progress) {
   if (vertices_per_part == 0) throw InvalidInput("--vertices-per-part must be at least 1");
@@ -182,6 +186,9 @@ PartitionInfo partition_file(const std::string& input, std::size_t vertices_per_
   const std::size_t cells = bsp.cells();
 
   std::filesystem::create_directories(dir);
+  // An earlier partition's seam sides would pass for this one's where this one has none.
+  for (const auto& entry : std::filesystem::directory_iterator(dir))
+    if (entry.path().filename().string().rfind("seam-", 0) == 0) std::filesystem::remove(entry.path());
   const std::string scratch = dir + "/scratch";
   std::filesystem::remove_all(scratch);
   std::filesystem::create_directories(scratch);
@@ -291,6 +298,7 @@ PartitionInfo partition_file(const std::string& input, std::size_t vertices_per_
         part.triangles.push_back({static_cast<mesh::Index>(local_of.find(t.v[0])), static_cast<mesh::Index>(local_of.find(t.v[1])),
                                   static_cast<mesh::Index>(local_of.find(t.v[2]))});
       mesh::write_part(part, part_path(dir, part_of_cell[c], false));
+      for (const auto& [q, side] : mesh::seam_sides(part)) mesh::write_part(side, seam_path(dir, part_of_cell[c], q));
     }
     for (const char* kind : {"V-", "T-", "R-", "F-"}) std::filesystem::remove(scratch + "/" + kind + id);
     if (progress) progress(0.5 + 0.5 * double(c + 1) / double(cells));

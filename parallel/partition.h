@@ -33,7 +33,7 @@ struct PartitionInfo {
   double seconds = 0;
 };
 
-// Writes DIR/part-<p>.mfp and DIR/partition.txt. \throws ParseError, IoError, InvalidInput.
+// Writes DIR/part-<p>.mfp, their seam sides DIR/seam-<p>-<q>.mfp and DIR/partition.txt. \throws ParseError, IoError, InvalidInput.
 PartitionInfo partition_file(const std::string& input, std::size_t vertices_per_part, const std::string& dir,
                              const std::function<void(double)>& progress = {});
 
@@ -45,5 +45,8 @@ PartitionInfo read_partition_info(const std::string& dir);
 std::string part_path(const std::string& dir, std::size_t p, bool simplified);
 // DIR/rem-<from>-<to>.bin: what part `from` removed on its boundary with `to` (mesh::RemFile).
 std::string rem_path(const std::string& dir, std::size_t from, std::size_t to);
+// DIR/seam-<p>-<q>.mfp: part p's side of its seam with q as partitioned (mesh::seam_sides),
+// written beside the parts; absent when p and q share no vertex with each other alone.
+std::string seam_path(const std::string& dir, std::size_t p, std::size_t q);
 
 }  // namespace meshflow::parallel

@@ -262,29 +262,6 @@ mesh::PartFile simplify_part(const mesh::PartFile& part, double max_error_abs, P
   return out;
 }
 
-mesh::PartFile seam_neighbourhood(const mesh::PartFile& neighbour, std::uint32_t part) {
-  auto near_part = [&](const mesh::Triangle& t) {
-    return neighbour.partner[t[0]] == part || neighbour.partner[t[1]] == part || neighbour.partner[t[2]] == part;
-  };
-  // Numbered in the neighbour's order, so that the global ids still ascend (a valid part file).
-  constexpr mesh::Index kUnused = ~mesh::Index{0};
-  std::vector<mesh::Index> renumber(neighbour.positions.size(), kUnused);
-  for (const mesh::Triangle& t : neighbour.triangles)
-    if (near_part(t))
-      for (mesh::Index v : t) renumber[v] = 0;
-  mesh::PartFile near;
-  for (std::size_t v = 0; v < renumber.size(); ++v)
-    if (renumber[v] != kUnused) {
-      renumber[v] = static_cast<mesh::Index>(near.positions.size());
-      near.global_ids.push_back(neighbour.global_ids[v]);
-      near.positions.push_back(neighbour.positions[v]);
-      near.partner.push_back(neighbour.partner[v]);
-    }
-  for (const mesh::Triangle& t : neighbour.triangles)
-    if (near_part(t)) near.triangles.push_back({renumber[t[0]], renumber[t[1]], renumber[t[2]]});
-  return near;
-}
-
 PartStats simplify_part_file(const std::string& in, const std::string& out, double max_error_abs) {
   PartStats stats;
   mesh::PartFile simplified = simplify_part(mesh::read_part(in), max_error_abs, &stats);

@@ -30,15 +30,11 @@ struct PartSeams {
   std::uint32_t part = 0;                 // this part's number
   std::vector<mesh::RemFile> incoming;    // from the simplified neighbours (to == part)
   std::vector<std::uint32_t> unsimplified;  // neighbours still to come: one Rem file each out
-  // Optional, in the order of `unsimplified`: their part files as partitioned, so that a
-  // collapse on a seam is checked on the neighbour's side too (link condition, no flipped
-  // triangle); only their triangles at the vertices shared with this part are used.
+  // Optional, in the order of `unsimplified`: their sides of the seams (mesh::seam_sides, as
+  // partitioned), so that a collapse on a seam is checked on the neighbour's side too (link
+  // condition, no flipped triangle); a whole part file also does.
   std::vector<mesh::PartFile> unsimplified_parts;
 };
-
-// What PartSeams::unsimplified_parts needs of neighbour part `neighbour`: its triangles with a
-// corner shared with part `part`, their vertices renumbered (global ids ascending kept).
-mesh::PartFile seam_neighbourhood(const mesh::PartFile& neighbour, std::uint32_t part);
 
 // \throws InvalidInput when max_error_abs <= 0, or when a Rem file does not fit the part.
 // With seams, `outgoing` receives one Rem file per seams->unsimplified neighbour, in that order.

@@ -345,6 +345,26 @@ TEST(Partition, PartnersAreConsistentOnBothSides) {
   EXPECT_GT(three, 0u);
   EXPECT_EQ(pairs + three, info.shared_vertices);
   EXPECT_EQ(three, info.shared_by_3_or_more);
+  // Each part's side of each seam, written beside the parts: exactly the part's triangles with a
+  // corner shared with that neighbour alone, in global ids.
+  std::size_t seams = 0;
+  for (std::uint32_t p = 0; p < info.parts; ++p) {
+    mesh::PartFile part = mesh::read_part(part_path(dir.file("parts"), p, false));
+    for (std::uint32_t q : info.adjacency[p]) {
+      std::set<std::array<std::uint64_t, 3>> expected, written;
+      for (const auto& t : part.triangles)
+        if (part.partner[t[0]] == q || part.partner[t[1]] == q || part.partner[t[2]] == q)
+          expected.insert({part.global_ids[t[0]], part.global_ids[t[1]], part.global_ids[t[2]]});
+      const std::string path = seam_path(dir.file("parts"), p, q);
+      ASSERT_EQ(std::filesystem::exists(path), !expected.empty()) << path;
+      if (expected.empty()) continue;
+      mesh::PartFile side = mesh::read_part(path);
+      for (const auto& t : side.triangles) written.insert({side.global_ids[t[0]], side.global_ids[t[1]], side.global_ids[t[2]]});
+      EXPECT_EQ(written, expected) << path;
+      ++seams;
+    }
+  }
+  EXPECT_GT(seams, info.parts);
 }
 
 // The Rem scheme: after the parts (1 or 2 workers), every two adjacent parts have the same
