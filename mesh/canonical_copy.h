@@ -16,8 +16,8 @@
 //
 // Memory: bounded buffers (the reader's 4 MiB, batches of 64k elements, `buffer_bytes`, the
 // compressor's state), a few MB whatever the input's size. One exception is inherent to the
-// format: the STL reader welds with a map of the distinct positions seen so far (about 50 bytes
-// a vertex); read_mesh() holds that map and the whole mesh besides.
+// format: the STL reader welds with a map of the distinct positions seen so far (about 65 bytes
+// a vertex at its peak); read_mesh() holds that map and the whole mesh besides.
 // Disk: the scratch files hold about the canonical size while the output is being written.
 
 #include <cstddef>
