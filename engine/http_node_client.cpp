@@ -7,7 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
-#include "mesh/canonical_ply.h"
+#include "mesh/canonical_copy.h"
 #include "mesh/errors.h"
 #include "mesh/mesh_io.h"
 #include "parallel/distributed_simplify.h"
@@ -391,12 +391,12 @@ StepReport HttpNodeClient::run_split(const std::vector<NodeCandidate>& nodes, co
   fs::remove(in);
   fs::remove_all(dir / "parts");
 
-  // Served like a node's outputs: canonical PLY, zstd (the SHA-256 is of the PLY).
-  mesh::Mesh result = mesh::read_mesh(out);
+  // Served like a node's outputs: canonical PLY, zstd (the SHA-256 is of the PLY), compressed
+  // by a streaming copy so that the hub never holds the merged mesh.
   const std::string served = out + ".zst";
-  mesh::write_mesh(result, served);
+  mesh::CanonicalCopy result = mesh::copy_canonical_ply(out, served);
   fs::remove(out);
-  Answer answer{"", json{{"output", options_.publish(served)}, {"sha256", mesh::mesh_sha256(result)}}};
+  Answer answer{"", json{{"output", options_.publish(served)}, {"sha256", result.sha256}}};
   StepReport report;
   report.operation = "Simplify";
   report.node = label + " (" + std::to_string(done.partition.parts) + " parts)";
@@ -406,7 +406,7 @@ StepReport HttpNodeClient::run_split(const std::vector<NodeCandidate>& nodes, co
   current_url_ = answer.body["output"];
   current_sha_ = answer.body["sha256"];
   current_node_.clear();
-  current_vertices_ = result.num_vertices();
+  current_vertices_ = result.vertices;
   return report;
 }
 

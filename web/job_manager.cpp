@@ -9,7 +9,7 @@
 #include "engine/http_node_client.h"
 #include "engine/validate.h"
 #include "engine/workflow_parser.h"
-#include "mesh/canonical_ply.h"
+#include "mesh/canonical_copy.h"
 #include "mesh/errors.h"
 #include "mesh/mesh_io.h"
 #include "protocol/http_client.h"
@@ -133,11 +133,12 @@ std::string JobManager::submit(const JobRequest& request) {
   job.workflow_id = request.workflow_id;
   job.transfer = transfer;
   if (!request.upload.empty()) {
-    mesh::Mesh input = mesh::read_mesh(request.upload.string());
-    mesh::write_mesh(input, input_file(id).string());
+    // Streamed (issue 7): the hub never holds the input mesh; bad input throws the reader's
+    // ParseError, naming the file and the line or byte, and leaves no input file behind.
+    mesh::CanonicalCopy copy = mesh::copy_canonical_ply(request.upload.string(), input_file(id).string());
     std::filesystem::remove(request.upload);
     job.input_path = input_file(id).string();
-    job.input_sha256 = mesh::mesh_sha256(input);
+    job.input_sha256 = copy.sha256;
   } else {
     job.input_url = !request.input_url.empty() ? request.input_url : workflow.input_url.value_or("");
     if (job.input_url.empty())
@@ -187,16 +188,15 @@ void JobManager::fetch_input(engine::JobRecord& job) {
   http.max_bytes = max_fetch_bytes_;
   protocol::DownloadResult got = protocol::http_download(job.input_url, fetched.string(), std::nullopt, false, http);
   if (!got.ok()) throw IoError("fetching input_url " + job.input_url + ": " + got.describe());
-  mesh::Mesh input;
+  mesh::CanonicalCopy copy;
   try {
-    input = mesh::read_mesh(fetched.string());
-  } catch (const std::exception& e) {
+    copy = mesh::copy_canonical_ply(fetched.string(), input_file(job.id).string());
+  } catch (const InvalidInput& e) {  // the reader's ParseError; a failed write is an IoError
     throw InvalidInput("input_url " + job.input_url + " is not a mesh: " + e.what());
   }
-  mesh::write_mesh(input, input_file(job.id).string());
   std::filesystem::remove(fetched);
   job.input_path = input_file(job.id).string();
-  job.input_sha256 = mesh::mesh_sha256(input);
+  job.input_sha256 = copy.sha256;
   journal_.set_input(job.id, job.input_path, job.input_sha256);
 }
 
@@ -235,10 +235,11 @@ void JobManager::run(const std::string& id) {
       running = s;
       journal_.put_step(id, s);
     };
-    mesh::Mesh input = mesh::read_mesh(job->input_path);
-    options.reference_diagonal = mesh::bounding_box(input).diagonal();
+    // The canonical input streamed for its box and vertex count, never loaded (issue 7).
+    mesh::MeshExtent input = mesh::measure_extent(job->input_path);
+    options.reference_diagonal = input.diagonal();
     // A Simplify step too large for every node runs in parts; its output is served from here.
-    options.input_vertices = input.num_vertices();
+    options.input_vertices = input.vertices;
     options.work_dir = (job_dir(id) / "split").string();
     options.publish = [this, id](const std::string& path) {
       std::string relative = std::filesystem::relative(path, job_dir(id) / "split").generic_string();
@@ -300,9 +301,15 @@ void JobManager::run(const std::string& id) {
       services_.record_transfer(live.current_node(), got.bytes,
                                 std::chrono::duration_cast<std::chrono::milliseconds>(
                                     std::chrono::steady_clock::now() - fetching).count());
-    mesh::Mesh output = mesh::read_mesh(fetched.string());
-    mesh::write_mesh(output, output_file(id).string());
+    // The node's canonical PLY, zstd-compressed: decompressed by a streaming copy, whose hash
+    // is the one the download was checked against.
+    mesh::CanonicalCopy output = mesh::copy_canonical_ply(fetched.string(), output_file(id).string());
     std::filesystem::remove(fetched);
+    if (output.sha256 != live.current_sha256()) {
+      std::filesystem::remove(output_file(id));
+      throw IoError("the result from " + live.current_url() + " is not canonical: its SHA-256 is " +
+                    output.sha256 + ", expected " + live.current_sha256());
+    }
     auto elapsed = std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now() - started);
     journal_.set_timings(id, broadcast.ms, broadcast.bytes, elapsed.count());
     journal_.set_output(id, output_file(id).string(), live.current_sha256());

@@ -49,9 +49,10 @@ class JobManager {
   // What jobs that do not say use: "smaller" (the protocol) or "output" (whole meshes).
   void set_default_transfer(std::string mode) { default_transfer_ = std::move(mode); }
 
-  // Validates the workflow (XSD + operations) and the input: an uploaded mesh is read and
-  // canonicalised to DATA/jobs/ID/input.ply.zst now; an input URL is checked now (http(s),
-  // public unless allowed) and fetched when the job starts. Journals the job and queues it.
+  // Validates the workflow (XSD + operations) and the input: an uploaded mesh is streamed into
+  // its canonical copy DATA/jobs/ID/input.ply.zst now (mesh::copy_canonical_ply, never loaded);
+  // an input URL is checked now (http(s), public unless allowed) and fetched and copied the
+  // same way when the job starts. Journals the job and queues it.
   // \throws ParseError / InvalidInput for a bad workflow, mesh, URL or option (nothing is kept).
   std::string submit(const JobRequest& request);
   std::string submit(const std::string& workflow_xml, const std::filesystem::path& upload);

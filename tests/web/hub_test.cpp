@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
+#include "mesh/canonical_ply.h"
 #include "mesh/generate.h"
 #include "mesh/measures.h"
 #include "mesh/mesh_io.h"
@@ -329,6 +330,60 @@ TEST(Hub, FetchesAnInputUrlOnlyWhereAllowed) {
   json bad = wait_for(hub, json::parse(slurp(dir.file("f.json"))).value("id", ""));
   EXPECT_EQ(bad["state"], "failed");
   EXPECT_NE(bad.value("error", "").find("is not a mesh"), std::string::npos) << bad.dump();
+}
+
+// Issue 7: the hub canonicalises an upload by streaming it, never loading it. A gzipped OBJ
+// whose vertices and faces interleave (quads) becomes the canonical input of
+// write_mesh(read_mesh()), byte for byte; a damaged upload gets the reader's error (400) and
+// leaves no job behind.
+TEST(Hub, AnUploadIsCanonicalisedByStreamingAndADamagedOneLeavesNothing) {
+  TempDir dir;
+  ChildProcess hub_process({MESHFLOW_BINARY, "hub", "--port", "0", "--data", dir.file("hub")});
+  std::string hub = hub_process.ready_url();
+  ASSERT_FALSE(hub.empty());
+  ChildProcess a(hub_node(hub, dir, "a"));
+  ASSERT_FALSE(a.ready_url().empty());
+  {
+    std::ofstream obj(dir.file("strip.obj"));
+    for (int i = 0; i < 50; ++i) {
+      obj << "v " << i << " 0 0\nv " << i << " 1 " << (i % 3) * 0.1 << "\n";
+      if (i > 0) obj << "f " << 2 * i - 1 << " " << 2 * i + 1 << " " << 2 * i + 2 << " " << 2 * i << "\n";
+    }
+  }
+  ASSERT_EQ(shell("gzip -k " + dir.file("strip.obj")), 0);
+  const char* xml = "<workflow><body><atomic><name>LaplacianSmoothing</name></atomic></body></workflow>";
+  std::string id = submit(hub, dir, xml, dir.file("strip.obj.gz"));
+  ASSERT_FALSE(id.empty());
+  json job = wait_for(hub, id);
+  ASSERT_EQ(job["state"], "done") << job.dump();
+  mesh::Mesh original = mesh::read_mesh(dir.file("strip.obj"));
+  ASSERT_EQ(original.num_triangles(), 98u);
+  auto input = protocol::http_download(hub + "/api/jobs/" + id + "/input", dir.file("input.ply.zst"),
+                                       mesh::mesh_sha256(original), true);
+  ASSERT_TRUE(input.ok()) << input.describe();
+  mesh::write_mesh(original, dir.file("ref.ply.zst"));
+  EXPECT_TRUE(slurp(dir.file("input.ply.zst")) == slurp(dir.file("ref.ply.zst")));
+  // The output, decompressed by the hub's streaming copy, is the canonical PLY of its hash.
+  auto output = protocol::http_download(hub + "/api/jobs/" + id + "/output", dir.file("out.ply"),
+                                        job["output_sha256"].get<std::string>());
+  ASSERT_TRUE(output.ok()) << output.describe();
+  EXPECT_EQ(mesh::read_mesh(dir.file("out.ply")).num_vertices(), original.num_vertices());
+
+  std::string bytes = slurp(dir.file("strip.obj.gz"));
+  std::ofstream(dir.file("cut.obj.gz"), std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+  std::ofstream(dir.file("w.xml")) << xml;
+  std::string command = "curl -s -m 60 -o " + dir.file("bad.json") + " -w '%{http_code}' -F workflow=@" +
+                        dir.file("w.xml") + " -F input=@" + dir.file("cut.obj.gz") + " " + hub + "/api/jobs > " +
+                        dir.file("code");
+  ASSERT_EQ(std::system(command.c_str()), 0);
+  EXPECT_EQ(slurp(dir.file("code")), "400");
+  json error = json::parse(slurp(dir.file("bad.json")), nullptr, false);
+  EXPECT_NE(error.value("error", "").find("truncated gzip stream"), std::string::npos) << error.dump();
+  std::vector<std::string> jobs;
+  for (const auto& entry : std::filesystem::directory_iterator(dir.file("hub") + "/jobs"))
+    jobs.push_back(entry.path().filename().string());
+  EXPECT_EQ(jobs, std::vector<std::string>{id});
+  EXPECT_TRUE(protocol::http_request("GET", hub + "/healthz").ok());
 }
 
 // The node answers every /run with a task URL at once (--answer-within-ms 0): the job only
