@@ -457,29 +457,34 @@ struct PlyReader {
             strip.clear();
           }
         }
-        std::size_t is = scalar_size(p.type);
-        std::uint64_t need = items * is;
-        if (in.fill(need) < need)
-          in.fail_byte("unexpected end of file in element " + e.name + " " + std::to_string(r) +
-                           " of " + std::to_string(e.count) + ": expected " + std::to_string(need) +
-                           " more bytes",
-                       in.offset());
-        const char* data = in.data();
-        for (std::uint64_t k = 0; k < items; ++k) {
-          if (pi == ix) xyz[0] = decode(p.type, data + k * is, swap);
-          else if (pi == iy) xyz[1] = decode(p.type, data + k * is, swap);
-          else if (pi == iz) xyz[2] = decode(p.type, data + k * is, swap);
-          else if (pi == il) {
-            double value = decode(p.type, data + k * is, swap);
-            if (is_face) {
-              polygon.push_back(check_index(value, r, record_byte, "face"));
-            } else {
-              if (value != -1) check_index(value, r, record_byte, "tristrip");
-              strip.push_back(static_cast<std::int64_t>(value));
+        // In pieces: a list count is the file's word, not a size to allocate at once.
+        const std::size_t is = scalar_size(p.type);
+        for (std::uint64_t k = 0; k < items;) {
+          const std::uint64_t piece = std::min<std::uint64_t>(items - k, std::uint64_t{1} << 16);
+          const std::uint64_t need = piece * is;
+          if (in.fill(need) < need)
+            in.fail_byte("unexpected end of file in element " + e.name + " " + std::to_string(r) +
+                             " of " + std::to_string(e.count) + ": expected " + std::to_string((items - k) * is) +
+                             " more bytes",
+                         in.offset());
+          const char* data = in.data();
+          for (std::uint64_t j = 0; j < piece; ++j) {
+            if (pi == ix) xyz[0] = decode(p.type, data + j * is, swap);
+            else if (pi == iy) xyz[1] = decode(p.type, data + j * is, swap);
+            else if (pi == iz) xyz[2] = decode(p.type, data + j * is, swap);
+            else if (pi == il) {
+              double value = decode(p.type, data + j * is, swap);
+              if (is_face) {
+                polygon.push_back(check_index(value, r, record_byte, "face"));
+              } else {
+                if (value != -1) check_index(value, r, record_byte, "tristrip");
+                strip.push_back(static_cast<std::int64_t>(value));
+              }
             }
           }
+          in.skip(need);
+          k += piece;
         }
-        in.skip(need);
       }
       if (is_vertex) emit_vertex(xyz[0], xyz[1], xyz[2], r, record_byte);
       else if (is_face) emit_polygon(r, record_byte);

@@ -206,6 +206,23 @@ TEST(MeshReaders, BinaryErrorsNameTheByteOffset) {
       << message;
 }
 
+// A list count is the file's word: 4 billion doubles announced in a 100-byte file are an error
+// naming the byte, not 32 GB asked of the allocator.
+TEST(MeshReaders, AHugeListCountInAShortFileIsAnErrorNotAnAllocation) {
+  std::string header =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar int vertex_indices\nproperty list uint double weights\n"
+      "end_header\n";
+  std::string indices = std::string(1, '\3') + std::string(4, '\0') + std::string("\1\0\0\0", 4) + std::string("\2\0\0\0", 4);
+  std::string face = indices + std::string(4, '\xff') + std::string(16, '\0');
+  std::string message = error_of(header + std::string(36, '\0') + face, "huge.ply");
+  EXPECT_NE(message.find("huge.ply: byte " + std::to_string(header.size() + 36 + 13 + 4) +
+                         ": unexpected end of file in element face 0 of 1: expected " +
+                         std::to_string(std::uint64_t{0xFFFFFFFF} * 8) + " more bytes"),
+            std::string::npos)
+      << message;
+}
+
 TEST(MeshReaders, PlyWithExtraPropertiesBigEndianAndPolygons) {
   // Big endian, a double coordinate, an extra uchar per vertex, a quad with a colour list.
   std::string text =
