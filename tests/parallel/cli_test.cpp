@@ -22,6 +22,20 @@ struct Outcome {
   std::string err;
 };
 
+// DIR/in.ply: a generated mesh.
+void generate_input(const meshflow::testing::TempDir& dir, mesh::Shape shape, std::uint64_t triangles) {
+  mesh::GenerateParams g;
+  g.shape = shape;
+  g.triangles = triangles;
+  mesh::generate_mesh(g, dir.file("in.ply"));
+}
+
+// An integer field of a --report file's text, -1 when missing.
+long report_number(const std::string& json, const std::string& key) {
+  std::size_t at = json.find("\"" + key + "\": ");
+  return at == std::string::npos ? -1L : std::atol(json.c_str() + at + key.size() + 4);
+}
+
 Outcome run(const meshflow::testing::TempDir& dir, const std::string& args) {
   std::string err = dir.file("stderr");
   int raw = std::system(("timeout 120 " MESHFLOW_BINARY " " + args + " >/dev/null 2>" + err).c_str());
@@ -33,10 +47,7 @@ Outcome run(const meshflow::testing::TempDir& dir, const std::string& args) {
 
 TEST(SimplifyCommand, ReportsPartsAndMergeReproducesTheResult) {
   meshflow::testing::TempDir dir;
-  mesh::GenerateParams g;
-  g.shape = mesh::Shape::Sphere;
-  g.triangles = 20000;
-  mesh::generate_mesh(g, dir.file("in.ply"));
+  generate_input(dir, mesh::Shape::Sphere, 20000);
   Outcome r = run(dir, "simplify " + dir.file("in.ply") + " -o " + dir.file("out.ply") + " --max-error 0.1 --vertices-per-part 2000"
                " --workers 2 --report " + dir.file("r.json") + " --parts-dir " + dir.file("parts"));
   ASSERT_EQ(r.status, 0) << r.err;
@@ -72,10 +83,7 @@ TEST(SimplifyCommand, RefusesBadInputClearly) {
 // node as with two; with --fixed-seams too.
 TEST(SimplifyCommand, NodesGiveTheSameResultAsLocalWorkers) {
   meshflow::testing::TempDir dir;
-  mesh::GenerateParams g;
-  g.shape = mesh::Shape::Terrain;
-  g.triangles = 30000;
-  mesh::generate_mesh(g, dir.file("in.ply"));
+  generate_input(dir, mesh::Shape::Terrain, 30000);
   meshflow::testing::ChildProcess a({MESHFLOW_BINARY, "node", "--listen", "127.0.0.1:0", "--data", dir.file("a")});
   meshflow::testing::ChildProcess b({MESHFLOW_BINARY, "node", "--listen", "127.0.0.1:0", "--data", dir.file("b"),
                                      "--answer-within-ms", "1"});  // b answers with a task to poll
@@ -97,10 +105,7 @@ TEST(SimplifyCommand, NodesGiveTheSameResultAsLocalWorkers) {
   std::string json((std::istreambuf_iterator<char>(report)), std::istreambuf_iterator<char>());
   EXPECT_NE(json.find("\"vertices_in\": "), std::string::npos) << json;  // the nodes' stats came back
   EXPECT_EQ(json.find("\"vertices_in\": 0,"), std::string::npos) << json;
-  auto number = [&](const std::string& key) {
-    std::size_t at = json.find("\"" + key + "\": ");
-    return at == std::string::npos ? -1L : std::atol(json.c_str() + at + key.size() + 4);
-  };
+  auto number = [&](const std::string& key) { return report_number(json, key); };
   EXPECT_GT(number("shared_removed_by_half_edge_collapses"), 0) << json;  // the nodes made Rem files
   EXPECT_EQ(number("shared_removed_by_half_edge_collapses"), number("shared_removed_by_replay")) << json;
   r = run(dir, "simplify " + common + " -o " + dir.file("local-fixed.ply") + " --workers 2 --fixed-seams");
@@ -146,10 +151,7 @@ TEST(SimplifyCommand, NodesGiveTheSameResultAsLocalWorkers) {
 // number: every logged removal has one partner), and 1 or 2 workers give the same mesh.
 TEST(SimplifyCommand, WorkerProcessesExchangeRemFiles) {
   meshflow::testing::TempDir dir;
-  mesh::GenerateParams g;
-  g.shape = mesh::Shape::Terrain;
-  g.triangles = 30000;
-  mesh::generate_mesh(g, dir.file("in.ply"));
+  generate_input(dir, mesh::Shape::Terrain, 30000);
   const std::string common = dir.file("in.ply") + " --max-error 0.1 --vertices-per-part 3000";
   for (const char* workers : {"1", "2"}) {
     Outcome r = run(dir, "simplify " + common + " -o " + dir.file(std::string("w") + workers + ".ply") + " --workers " +
@@ -159,10 +161,7 @@ TEST(SimplifyCommand, WorkerProcessesExchangeRemFiles) {
   EXPECT_TRUE(mesh::read_mesh(dir.file("w1.ply")) == mesh::read_mesh(dir.file("w2.ply")));
   std::ifstream report(dir.file("r.json"));
   std::string json((std::istreambuf_iterator<char>(report)), std::istreambuf_iterator<char>());
-  auto number = [&](const std::string& key) {
-    std::size_t at = json.find("\"" + key + "\": ");
-    return at == std::string::npos ? -1L : std::atol(json.c_str() + at + key.size() + 4);
-  };
+  auto number = [&](const std::string& key) { return report_number(json, key); };
   EXPECT_GT(number("shared_removed_by_half_edge_collapses"), 0) << json;
   EXPECT_EQ(number("shared_removed_by_half_edge_collapses"), number("shared_removed_by_replay")) << json;
   int rem_files = 0;
@@ -175,10 +174,7 @@ TEST(SimplifyCommand, WorkerProcessesExchangeRemFiles) {
 // to the other node; with no other node the run fails naming it.
 TEST(SimplifyCommand, PartsOfANodeThatStopsAnsweringGoElsewhere) {
   meshflow::testing::TempDir dir;
-  mesh::GenerateParams g;
-  g.shape = mesh::Shape::Sphere;
-  g.triangles = 20000;
-  mesh::generate_mesh(g, dir.file("in.ply"));
+  generate_input(dir, mesh::Shape::Sphere, 20000);
   std::ofstream(dir.file("stub.py")) << R"(import http.server, socketserver, sys
 class H(http.server.BaseHTTPRequestHandler):
     def do_GET(self):
