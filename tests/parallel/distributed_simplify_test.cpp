@@ -174,6 +174,24 @@ TEST(Partition, SamePartsFromEveryFormat) {
   }
 }
 
+// The single-node result the parts are held to: Simplify at 0.05 % of the diagonal.
+struct SingleNode {
+  Mesh input;
+  double max_error;
+  Mesh single;
+  mesh::Measures measures;
+  double error;
+};
+SingleNode single_node(const std::string& in) {
+  SingleNode r;
+  r.input = mesh::read_mesh(in);
+  r.max_error = 0.0005 * mesh::bounding_box(r.input).diagonal();
+  r.single = services::simplify(r.input, {.max_error = r.max_error, .progress = {}}).output;
+  r.measures = mesh::compute_measures(r.single);
+  r.error = services::compare(r.input, r.single).mean_ab;
+  return r;
+}
+
 // The guarantees of issue 7 against a single-node simplification of the same input: same
 // components and boundary loops (no crack), manifold, watertight when the input is, error
 // within 5 %, vertex count within 10 %, and the same result whatever the number of workers.
@@ -182,11 +200,7 @@ TEST(DistributedSimplify, MatchesSingleNodeWithoutCracks) {
     SCOPED_TRACE(shape == mesh::Shape::Sphere ? "sphere" : "terrain");
     meshflow::testing::TempDir dir;
     std::string in = generated(dir, shape, 80000);
-    Mesh input = mesh::read_mesh(in);
-    double max_error = 0.0005 * mesh::bounding_box(input).diagonal();
-    Mesh single = services::simplify(input, {.max_error = max_error, .progress = {}}).output;
-    auto s = mesh::compute_measures(single);
-    double single_error = services::compare(input, single).mean_ab;
+    auto [input, max_error, single, s, single_error] = single_node(in);
     Mesh first;
     for (unsigned workers : {1u, 3u}) {
       DistributedParams params;
@@ -377,11 +391,7 @@ TEST(RemFiles, ReplayKeepsCommonBoundariesEqualAndMatchesSingleNode) {
     SCOPED_TRACE(shape == mesh::Shape::Sphere ? "sphere" : "terrain");
     meshflow::testing::TempDir dir;
     std::string in = generated(dir, shape, 200000);
-    Mesh input = mesh::read_mesh(in);
-    double max_error = 0.0005 * mesh::bounding_box(input).diagonal();
-    Mesh single = services::simplify(input, {.max_error = max_error, .progress = {}}).output;
-    auto s = mesh::compute_measures(single);
-    double single_error = services::compare(input, single).mean_ab;
+    auto [input, max_error, single, s, single_error] = single_node(in);
     Mesh first;
     for (unsigned workers : {1u, 2u}) {
       SCOPED_TRACE(workers);
