@@ -48,7 +48,7 @@ std::vector<OperationSpec> build_specs() {
        "Patches every boundary loop but the one with the most edges (the border of a height field)."},
       {"Simplify", OperationKind::Atomic, mesh::ValueType::Real,
        {{"maxError", ParamType::Real, 0.1, 0.0, 100.0, true, kDistanceUnit,
-         "Stop where the RMS distance of a new vertex to its planes would exceed this"},
+         "Keep the RMS distance of each new vertex to its planes within this (and larger patches within proportionally less)"},
         {"targetVertices", ParamType::Natural, 0, 0.0, kMaxVertexId, false, "vertices",
          "Stop at this many vertices instead (0: use maxError)"}},
        "Quadric edge collapse with optimal placement and an adaptive error stop."},

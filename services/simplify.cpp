@@ -271,7 +271,8 @@ class Simplifier {
       if (alive_[v]) push_edges_of(static_cast<Index>(v), /*only_greater=*/true);
     heap_.heapify();
     compact_at_ = std::max<std::size_t>(heap_.size() * 9 / 8, 1024);
-    max_error_bits_ = std::bit_cast<std::uint32_t>(static_cast<float>(params_.max_error)) & ~std::uint32_t{0xff};
+    max_quadric_ = max_quadric(params_.max_error);
+    max_quadric_bits_ = std::bit_cast<std::uint32_t>(static_cast<float>(max_quadric_)) & ~std::uint32_t{0xff};
     SimplifyResult result;
     std::size_t start_vertices = live_vertices_;
     while (!heap_.empty()) {
@@ -281,11 +282,14 @@ class Simplifier {
       Placement place;
       if (!evaluate(c.keep, c.drop, place) || place.keep != c.keep || (key_of(place) ^ c.key) > 0xff)
         continue;  // looked current only because the 8-bit versions wrapped
-      if (params_.max_error > 0 && place.rms > params_.max_error) {
-        // Ranked by rms in this mode, in keys that keep 15 bits of mantissa: stop once past the
-        // bound's key, skip an entry above the bound that shares its key.
-        if ((c.key & ~std::uint32_t{0xff}) > max_error_bits_) break;
-        continue;
+      if (params_.max_error > 0) {
+        // Keys keep 15 bits of mantissa: stop once past the quadric bound's key, skip an entry
+        // above it that shares its key; skip a collapse beyond the rms bound.
+        if (place.cost > max_quadric_) {
+          if ((c.key & ~std::uint32_t{0xff}) > max_quadric_bits_) break;
+          continue;
+        }
+        if (place.rms > params_.max_error) continue;
       }
       if (!collapse(c.keep, c.drop, place.position)) continue;
       if (partner_ && partner_[c.drop] != kNoPartner) result.seam_collapses.emplace_back(c.drop, c.keep);
@@ -322,12 +326,8 @@ class Simplifier {
   struct Cheaper {
     bool operator()(const Candidate& a, const Candidate& b) const { return a.key < b.key; }
   };
-  // rms with a max error, else the quadric error
-  static std::uint32_t cost_bits(const Placement& p, bool by_rms) {
-    return std::bit_cast<std::uint32_t>(static_cast<float>(by_rms ? p.rms : p.cost)) & ~std::uint32_t{0xff};
-  }
   std::uint32_t key_of(const Placement& p) const {
-    return cost_bits(p, params_.max_error > 0) | version_sum(p.keep, p.drop);
+    return (std::bit_cast<std::uint32_t>(static_cast<float>(p.cost)) & ~std::uint32_t{0xff}) | version_sum(p.keep, p.drop);
   }
   std::uint8_t version_sum(Index a, Index b) const { return static_cast<std::uint8_t>(version_[a] + version_[b]); }
 
@@ -632,7 +632,8 @@ class Simplifier {
   QuaternaryHeap<Candidate, Cheaper> heap_;
   std::size_t compact_at_ = 0;
   std::vector<std::uint8_t> version_;  // per vertex, wrapping: bumped when a collapse changes it
-  std::uint32_t max_error_bits_ = 0;    // params.max_error in the keys' cost bits
+  double max_quadric_ = 0;              // max_quadric(params.max_error)
+  std::uint32_t max_quadric_bits_ = 0;  // max_quadric_ in the keys' cost bits
   std::vector<Index> around_, shared_, nk_, nd_, common_;
   std::vector<std::pair<Index, int>> edge_count_;  // scratch, kept to avoid allocations
   std::size_t live_vertices_ = 0;
