@@ -406,7 +406,7 @@ StepReport HttpNodeClient::run_split(const std::vector<NodeCandidate>& nodes, co
   current_url_ = answer.body["output"];
   current_sha_ = answer.body["sha256"];
   current_node_.clear();
-  current_vertices_ = result.vertices;
+  report.vertices = current_vertices_ = result.vertices;
   return report;
 }
 
@@ -433,6 +433,7 @@ StepReport HttpNodeClient::run_atomic(const std::string& operation, const servic
   current_vertices_ = 0;
   if (auto stats = answer.body.find("stats"); stats != answer.body.end() && stats->is_object())
     current_vertices_ = stats->value("NumberOfVertices", std::uint64_t{0});
+  report.vertices = current_vertices_;
   return report;
 }
 

@@ -83,11 +83,13 @@ class HttpNodeClient : public NodeClient {
   const std::string& current_sha256() const { return current_sha_; }
   // The node that produced the current mesh ("" while it is the input).
   const std::string& current_node() const { return current_node_; }
-  // Resuming a job: the mesh after the last finished step is already on the nodes.
-  void set_current(std::string url, std::string sha256, std::string node) {
+  // Resuming a job: the mesh after the last finished step, with `vertices` vertices (0:
+  // unknown), is already on the nodes.
+  void set_current(std::string url, std::string sha256, std::string node, std::uint64_t vertices) {
     current_url_ = std::move(url);
     current_sha_ = std::move(sha256);
     current_node_ = std::move(node);
+    current_vertices_ = vertices;
   }
   std::vector<std::string> nodes_taking_part() const;
   const std::map<std::string, std::string>& placement() const { return plan_; }

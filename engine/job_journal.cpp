@@ -73,7 +73,7 @@ CREATE TABLE IF NOT EXISTS steps (
   job_id TEXT NOT NULL, seq INTEGER NOT NULL, operation TEXT, kind TEXT, node TEXT, state TEXT,
   run_ms INTEGER, transfer_ms INTEGER, update_ms INTEGER, sent TEXT, correction_bytes INTEGER,
   output_bytes INTEGER, value REAL, output_sha256 TEXT, output_url TEXT, correction_url TEXT,
-  error TEXT, wait_ms INTEGER, PRIMARY KEY (job_id, seq));
+  error TEXT, wait_ms INTEGER, output_vertices INTEGER, PRIMARY KEY (job_id, seq));
 )sql";
 
 // Columns added after the first release: added to an older journal when it is opened.
@@ -81,6 +81,7 @@ const char* kAddedColumns[][2] = {
     {"jobs", "input_url TEXT"},         {"jobs", "transfer TEXT"},
     {"jobs", "broadcast_ms INTEGER"},   {"jobs", "broadcast_bytes INTEGER"},
     {"jobs", "elapsed_ms INTEGER"},     {"steps", "wait_ms INTEGER"},
+    {"steps", "output_vertices INTEGER"},
 };
 
 bool has_column(sqlite3* db, const std::string& table, const std::string& column) {
@@ -196,7 +197,8 @@ void JobJournal::put_step(const std::string& id, const StepRecord& s) {
   std::lock_guard lock(mutex_);
   Statement(db_, "INSERT OR REPLACE INTO steps (job_id, seq, operation, kind, node, state, run_ms,"
                  " transfer_ms, update_ms, sent, correction_bytes, output_bytes, value, output_sha256,"
-                 " output_url, correction_url, error, wait_ms) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)")
+                 " output_url, correction_url, error, wait_ms, output_vertices)"
+                 " VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)")
       .text(1, id)
       .integer(2, s.seq)
       .text(3, s.operation)
@@ -215,6 +217,7 @@ void JobJournal::put_step(const std::string& id, const StepRecord& s) {
       .text(16, s.correction_url)
       .text(17, s.error)
       .integer(18, s.wait_ms)
+      .integer(19, static_cast<std::int64_t>(s.output_vertices))
       .step();
 }
 
@@ -243,7 +246,8 @@ std::optional<JobRecord> JobJournal::get(const std::string& id) const {
   r.elapsed_ms = job.column_int(14);
   Statement steps(db_, "SELECT seq, operation, kind, node, state, run_ms, transfer_ms, update_ms,"
                        " sent, correction_bytes, output_bytes, value, output_sha256, output_url,"
-                       " correction_url, error, wait_ms FROM steps WHERE job_id = ? ORDER BY seq");
+                       " correction_url, error, wait_ms, output_vertices FROM steps WHERE job_id = ?"
+                       " ORDER BY seq");
   steps.text(1, id);
   while (steps.step()) {
     StepRecord s;
@@ -264,6 +268,7 @@ std::optional<JobRecord> JobJournal::get(const std::string& id) const {
     s.correction_url = steps.column_text(14);
     s.error = steps.column_text(15);
     s.wait_ms = steps.column_int(16);
+    s.output_vertices = static_cast<std::uint64_t>(steps.column_int(17));
     r.steps.push_back(std::move(s));
   }
   return r;

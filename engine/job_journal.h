@@ -33,6 +33,7 @@ struct StepRecord {
   std::uint64_t output_bytes = 0;
   std::optional<double> value;    // analysis steps
   std::string output_sha256;      // atomic steps: the mesh after the step
+  std::uint64_t output_vertices = 0;  // atomic steps: its vertex count (0: unknown)
   std::string output_url;
   std::string correction_url;
   std::string error;

@@ -21,6 +21,7 @@ struct StepReport {
   std::string sent;                // "correction" or "output" ("" when no later node needed it)
   std::uint64_t correction_bytes = 0;
   std::uint64_t output_bytes = 0;
+  std::uint64_t vertices = 0;     // atomic steps: of the output (0: unknown)
   bool is_analysis = false;
   double value = 0;               // analysis steps
 };

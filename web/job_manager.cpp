@@ -30,7 +30,8 @@ class ReplayingNodes : public engine::NodeClient {
       : done_(std::move(done)), live_(live) {}
   engine::StepReport run_atomic(const std::string& operation, const services::Params& params) override {
     if (const engine::StepRecord* r = next(operation)) {
-      if (!r->output_url.empty()) live_.set_current(r->output_url, r->output_sha256, r->node);
+      if (!r->output_url.empty())
+        live_.set_current(r->output_url, r->output_sha256, r->node, r->output_vertices);
       return report_of(*r);
     }
     return live_.run_atomic(operation, params);
@@ -61,6 +62,7 @@ class ReplayingNodes : public engine::NodeClient {
     report.sent = r.sent;
     report.correction_bytes = r.correction_bytes;
     report.output_bytes = r.output_bytes;
+    report.vertices = r.output_vertices;
     report.is_analysis = r.kind == "analysis";
     report.value = r.value.value_or(0);
     return report;
@@ -284,6 +286,7 @@ void JobManager::run(const std::string& id) {
       if (r.is_analysis) s.value = r.value;
       s.output_sha256 = live.current_sha256();
       s.output_url = live.current_url();
+      s.output_vertices = r.vertices;
       running.reset();
       journal_.put_step(id, s);
     };
