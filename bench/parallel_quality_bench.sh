@@ -6,7 +6,7 @@
 # in-core ones; the goal here is at most 1.05x the best peer. Inputs: the shared scans cut into
 # small parts (so that they split at all), generated 2M terrain and 5M sphere in 250,000-vertex
 # parts; BIG=1 adds 20M-triangle ones in the default 1M-vertex parts (the peers then take up to
-# an hour each); SMALL=1 runs the scans only.
+# an hour each); SMALL=1 runs the scans only; NAMES picks inputs by name, PEERS the peers.
 # Figures: parts, output vertices, mean error (mean of compare's mean_ab and mean_ba, % of the
 # diagonal) of the parts run and of each in-core program, ratios to the best peer and to
 # in-core meshflow (at the same vertex count, which ranks collapses by quadric error like the
@@ -36,6 +36,9 @@ if [ -n "${BIG:-}" ]; then
   inputs+=("terrain20m:1000000:0.1" "sphere20m:1000000:0.1")
 fi
 
+if [ -n "${NAMES:-}" ]; then  # NAMES="terrain20m sphere20m": only those inputs
+  keep=(); for i in "${inputs[@]}"; do [[ " $NAMES " == *" ${i%%:*} "* ]] && keep+=("$i"); done; inputs=("${keep[@]}")
+fi
 echo "| input | parts | max error % | program | wall s | vertices | mean error % |"
 echo "|---|---:|---:|---|---:|---:|---:|"
 for item in "${inputs[@]}"; do

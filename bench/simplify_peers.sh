@@ -39,11 +39,17 @@ run() {  # run OUTPUT CMD... ; prints "seconds MB vertices mean_error" or "faile
   echo "$s $((kb / 1024)) $nv $err"
 }
 
-# peers V: the in-core peers at V output vertices, one "name seconds MB vertices error" line each.
+# peers V: the in-core peers at V output vertices, one "name seconds MB vertices error" line each;
+# PEERS (default "meshlab openmesh cgal") picks some, the others read "skipped".
 peers() {
-  local v=$1 bin
+  local v=$1 bin picked=" ${PEERS:-meshlab openmesh cgal} "
   bin=$(dirname "$MF")/bench
-  echo "meshlab $(run "$OUT/ml.ply" xvfb-run -a meshlabserver -i "$IN" -o "$OUT/ml.ply" -s "$(mlx $((2 * v)))")"
-  echo "openmesh $(run "$OUT/om.ply" OpenMesh-commandlineDecimater -M Q -n -$v -i "$IN" -o "$OUT/om.ply")"
-  echo "cgal $(run "$OUT/cg.ply" "$bin/cgal_simplify" "$IN" "$OUT/cg.ply" $v)"
+  for p in meshlab openmesh cgal; do
+    if [[ $picked != *" $p "* ]]; then echo "$p skipped - - -"; continue; fi
+    case $p in
+      meshlab) echo "meshlab $(run "$OUT/ml.ply" xvfb-run -a meshlabserver -i "$IN" -o "$OUT/ml.ply" -s "$(mlx $((2 * v)))")" ;;
+      openmesh) echo "openmesh $(run "$OUT/om.ply" OpenMesh-commandlineDecimater -M Q -n -$v -i "$IN" -o "$OUT/om.ply")" ;;
+      cgal) echo "cgal $(run "$OUT/cg.ply" "$bin/cgal_simplify" "$IN" "$OUT/cg.ply" $v)" ;;
+    esac
+  done
 }
