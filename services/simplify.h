@@ -9,10 +9,10 @@
 // The RMS bound alone merges flat regions until they too are at E over large areas, which cost
 // 4-11 % of mean error at equal vertex count on the shared scans (bench/README.md); with both, so
 // that flat parts still decimate more than detailed ones, 0-3 %. Or the run stops at
-// `target_vertices`. Boundary edges get constraint planes, a boundary
-// vertex only collapses along its boundary, loops of three edges are never closed; every collapse
-// keeps a manifold neighbourhood manifold (link condition) and flips no triangle. Non-manifold
-// edges and vertices are left alone.
+// `target_vertices`.
+// Boundary edges get constraint planes, a boundary vertex only collapses along its boundary,
+// loops of three edges are never closed; every collapse keeps a manifold neighbourhood manifold
+// (link condition) and flips no triangle. Non-manifold edges and vertices are left alone.
 
 #include <array>
 #include <atomic>

@@ -191,9 +191,10 @@ class RestartableHub {
     start("0");
     url = process_->ready_url();
   }
-  // Kills it and starts it again; false when it does not come up at the same URL.
+  void kill() { process_->kill_now(); }
+  // Kills it (if still running) and starts it again; false when it does not come up at the same URL.
   bool restart() {
-    process_->kill_now();
+    kill();
     start(url.substr(url.rfind(':') + 1));
     return process_->ready_url() == url;
   }
@@ -264,6 +265,7 @@ TEST(Hub, AResumedJobSplitsOnTheVertexCountOfItsLastReplayedStep) {
   ASSERT_EQ(wait_for(hub, id)["state"], "done");
   // Back to where a hub killed between the two steps leaves the journal: FillHoles done, the
   // Simplify running, the job running. (Killing it in that window by polling is a race.)
+  restartable.kill();
   {
     engine::JobJournal journal(dir.file("hub") + "/jobs.sqlite");
     std::optional<engine::JobRecord> job = journal.get(id);
